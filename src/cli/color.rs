@@ -1,0 +1,156 @@
+//! `specmap color`: the colour of a light, or of a reflectance under a light.
+
+use super::outln;
+use super::{ObserverArg, RuleArg, SpaceArg};
+use clap::Args;
+use specmap::colorimetry::{cct, srgb8, Cmfs, Lab, Observer, RgbSpace, Xyz, D65_XY};
+use specmap::data;
+use specmap::spectrum::{Interpolation, Rule, WavelengthGrid};
+
+#[derive(Debug, Args)]
+pub struct ColorArgs {
+    /// The spectrum: TABLE, TABLE:COLUMN or a CSV path. Alone it is a light (normalised to
+    /// Y = 100); with --under it is a reflectance.
+    spd: String,
+    /// Light for a reflectance (paper Eq. 11: k = 100 / integral(S * ybar)).
+    #[arg(long, value_name = "LIGHT")]
+    under: Option<String>,
+    /// Standard observer.
+    #[arg(long, value_enum, default_value_t = ObserverArg::Cie1931)]
+    observer: ObserverArg,
+    /// Wavelength range START:END:STEP in nm.
+    #[arg(long, default_value = "380:780:1")]
+    range: WavelengthGrid,
+    /// Integration rule.
+    #[arg(long, value_enum, default_value_t = RuleArg::Riemann)]
+    rule: RuleArg,
+    /// RGB space for `linear_rgb` (linear_srgb and srgb8 are always sRGB).
+    #[arg(long, value_enum, default_value_t = SpaceArg::Srgb)]
+    space: SpaceArg,
+    /// Machine-readable output.
+    #[arg(long)]
+    json: bool,
+}
+
+pub fn run(a: ColorArgs) -> anyhow::Result<()> {
+    let observer = Observer::from(a.observer);
+    let rule = Rule::from(a.rule);
+    let space = RgbSpace::from(a.space);
+    let cmfs = Cmfs::new(observer, &a.range)?;
+    let spd = data::spectrum(&a.spd)?;
+    let (xyz, white, under_label) = match &a.under {
+        Some(light) => {
+            let light = data::spectrum(light)?;
+            let s = light.data.resample(&a.range, Interpolation::LIGHT);
+            let r = spd.data.resample(&a.range, Interpolation::SMOOTH);
+            let xyz = cmfs.reflectance_xyz(&r, &s, rule)?;
+            let white = cmfs.light_xyz(&s, rule)?;
+            (xyz, white, Some(light.label))
+        }
+        None => {
+            let s = spd.data.resample(&a.range, Interpolation::LIGHT);
+            (cmfs.light_xyz(&s, rule)?, Xyz::from_xy(D65_XY), None)
+        }
+    };
+    let xy = xyz.xy();
+    let temperature = cct(xyz)?;
+    let linear_srgb = RgbSpace::SRGB.rgb_from_xyz(xyz);
+    let linear_rgb = space.rgb_from_xyz(xyz);
+    let code = srgb8(linear_srgb);
+    let lab = Lab::from_xyz(xyz, white);
+    let clipped = linear_srgb.iter().any(|&v| !(0.0..=1.0).contains(&v));
+
+    if a.json {
+        let doc = serde_json::json!({
+            "spd": spd.label,
+            "under": under_label,
+            "observer": observer,
+            "range": a.range.to_string(),
+            "rule": rule,
+            "XYZ": xyz.0,
+            "xy": xy,
+            "cct_K": temperature.kelvin,
+            "duv": temperature.duv,
+            "linear_srgb": linear_srgb,
+            "srgb8": code,
+            "srgb_clipped": clipped,
+            "space": space.name,
+            "linear_rgb": linear_rgb,
+            "lab": lab.0,
+            "lab_white": if under_label.is_some() { "the light (perfect reflector = L* 100)" } else { "D65, Y = 100" },
+        });
+        super::emit(&(serde_json::to_string_pretty(&doc)? + "\n"));
+        return Ok(());
+    }
+    let what = match &under_label {
+        Some(l) => format!("{} under {l}", spd.label),
+        None => format!("{} (as a light, Y = 100)", spd.label),
+    };
+    let obs = match observer {
+        Observer::Cie1931 => "CIE 1931 2°",
+        Observer::Cie1964 => "CIE 1964 10°",
+    };
+    let mut out = String::new();
+    outln!(out, "{what}\n  {obs}, {} nm, {rule} rule", a.range);
+    outln!(
+        out,
+        "  XYZ          {:>10.4} {:>10.4} {:>10.4}",
+        xyz.x(),
+        xyz.y(),
+        xyz.z()
+    );
+    outln!(out, "  xy           {:>10.5} {:>10.5}", xy[0], xy[1]);
+    match temperature.kelvin {
+        Some(k) => outln!(
+            out,
+            "  CCT          {k:>10.1} K   (Duv {:+.5})",
+            temperature.duv
+        ),
+        None => outln!(
+            out,
+            "  CCT          undefined: {:.3} from the Planckian locus in uv (limit 0.05)",
+            temperature.duv.abs()
+        ),
+    }
+    outln!(
+        out,
+        "  linear sRGB  {:>10.5} {:>10.5} {:>10.5}{}",
+        linear_srgb[0],
+        linear_srgb[1],
+        linear_srgb[2],
+        if clipped {
+            "   (outside [0,1]: clipped for 8-bit)"
+        } else {
+            ""
+        }
+    );
+    if space != RgbSpace::SRGB {
+        outln!(
+            out,
+            "  linear {:<6}{:>10.5} {:>10.5} {:>10.5}",
+            space.name,
+            linear_rgb[0],
+            linear_rgb[1],
+            linear_rgb[2]
+        );
+    }
+    outln!(
+        out,
+        "  sRGB 8-bit   {:>10} {:>10} {:>10}   #{:02X}{:02X}{:02X}",
+        code[0],
+        code[1],
+        code[2],
+        code[0],
+        code[1],
+        code[2]
+    );
+    outln!(
+        out,
+        "  CIELAB       {:>10.4} {:>10.4} {:>10.4}",
+        lab.0[0],
+        lab.0[1],
+        lab.0[2]
+    );
+    super::emit(&out);
+    Ok(())
+}

@@ -1,0 +1,131 @@
+//! Flag definitions and the dispatch to each command.
+
+mod color;
+mod data;
+
+use clap::{Parser, Subcommand, ValueEnum};
+use specmap::colorimetry::{Observer, RgbSpace};
+use specmap::spectrum::Rule;
+
+const AFTER_HELP: &str = "\
+Examples:
+  specmap data list
+  specmap data show D65 --range 380:780:5 --plot d65.png
+  specmap color colorchecker:red --under D65 --json
+  specmap color my_lamp.csv
+
+A spectrum is a built-in table name (see `specmap data list`), TABLE:COLUMN
+(e.g. colorchecker:red) or a CSV file with the header `wavelength_nm,<column>,...`.";
+
+/// Spectral data toolkit and RGB -> spectral environment-map converter.
+#[derive(Debug, Parser)]
+#[command(name = "specmap", version, about, after_help = AFTER_HELP)]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// List, print and plot the built-in spectral tables (and user CSVs).
+    #[command(subcommand)]
+    Data(data::DataCommand),
+    /// Colour of a spectrum: XYZ (paper Eq. 10/11), xy, CCT, linear RGB, 8-bit sRGB, CIELAB.
+    Color(color::ColorArgs),
+}
+
+pub fn run(cli: Cli) -> anyhow::Result<()> {
+    match cli.command {
+        Command::Data(c) => data::run(c),
+        Command::Color(a) => color::run(a),
+    }
+}
+
+/// CIE standard observers.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum ObserverArg {
+    /// CIE 1931 2-degree
+    Cie1931,
+    /// CIE 1964 10-degree
+    Cie1964,
+}
+
+impl From<ObserverArg> for Observer {
+    fn from(o: ObserverArg) -> Self {
+        match o {
+            ObserverArg::Cie1931 => Observer::Cie1931,
+            ObserverArg::Cie1964 => Observer::Cie1964,
+        }
+    }
+}
+
+/// Integration rules for the colour integrals.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum RuleArg {
+    /// h * sum: the paper's rule
+    Riemann,
+    /// composite trapezoid
+    Trapezoid,
+    /// composite Simpson (3/8 on the last three intervals when their number is odd)
+    Simpson,
+}
+
+impl From<RuleArg> for Rule {
+    fn from(r: RuleArg) -> Self {
+        match r {
+            RuleArg::Riemann => Rule::Riemann,
+            RuleArg::Trapezoid => Rule::Trapezoid,
+            RuleArg::Simpson => Rule::Simpson,
+        }
+    }
+}
+
+/// RGB colour spaces.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum SpaceArg {
+    /// sRGB / Rec.709 primaries, D65, matrix derived exactly from the primaries
+    Srgb,
+    /// sRGB with the paper's rounded Eq. 12 matrix
+    SrgbPaper,
+    /// ITU-R BT.2020
+    Rec2020,
+    /// ACES AP1, ACES white (linear, no adaptation applied)
+    Acescg,
+    /// Display P3
+    DisplayP3,
+}
+
+impl From<SpaceArg> for RgbSpace {
+    fn from(s: SpaceArg) -> Self {
+        match s {
+            SpaceArg::Srgb => RgbSpace::SRGB,
+            SpaceArg::SrgbPaper => RgbSpace::SRGB_PAPER,
+            SpaceArg::Rec2020 => RgbSpace::REC2020,
+            SpaceArg::Acescg => RgbSpace::ACESCG,
+            SpaceArg::DisplayP3 => RgbSpace::DISPLAY_P3,
+        }
+    }
+}
+
+/// Prints to stdout; a closed pipe (`specmap data list | head`) ends the program quietly
+/// instead of panicking.
+pub fn emit(text: &str) {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    if let Err(e) = out.write_all(text.as_bytes()).and_then(|_| out.flush()) {
+        if e.kind() == std::io::ErrorKind::BrokenPipe {
+            std::process::exit(0);
+        }
+        eprintln!("error: writing to stdout: {e}");
+        std::process::exit(1);
+    }
+}
+
+/// `writeln!` into a String (infallible).
+macro_rules! outln {
+    ($dst:expr, $($arg:tt)*) => {{
+        use std::fmt::Write as _;
+        let _ = writeln!($dst, $($arg)*);
+    }};
+}
+pub(crate) use outln;

@@ -1,0 +1,499 @@
+//! Spectral tables: the built-in ones (spectra/*.csv, embedded at build time) and user CSV files.
+//!
+//! A table is a CSV whose header is `wavelength_nm,<column>,...`; `#` starts a comment line.
+//! Wavelengths must increase strictly but need not be uniformly spaced (resampling handles that).
+//! A spectrum is named as `TABLE` (a one-column table), `TABLE:COLUMN`, or a CSV path (optionally
+//! `PATH:COLUMN`), so every command that takes a table name also takes a user's file.
+
+use crate::error::{Error, Result};
+use crate::spectrum::Tabulated;
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+include!(concat!(env!("OUT_DIR"), "/builtin_tables.rs"));
+
+/// What a built-in table holds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Kind {
+    /// Colour-matching functions (columns x, y, z).
+    Cmf,
+    /// CIE standard illuminants.
+    Illuminant,
+    /// Measured real light sources.
+    Light,
+    /// Surface reflectances.
+    Reflectance,
+}
+
+impl Kind {
+    fn from_folder(s: &str) -> Kind {
+        match s {
+            "cmf" => Kind::Cmf,
+            "illuminant" => Kind::Illuminant,
+            "light" => Kind::Light,
+            _ => Kind::Reflectance,
+        }
+    }
+}
+
+impl fmt::Display for Kind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Kind::Cmf => "cmf",
+            Kind::Illuminant => "illuminant",
+            Kind::Light => "light",
+            Kind::Reflectance => "reflectance",
+        })
+    }
+}
+
+/// Where a table came from.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Origin {
+    Builtin(Kind),
+    File(PathBuf),
+}
+
+/// A spectral table: shared wavelengths and one or more named columns.
+#[derive(Debug, Clone)]
+pub struct Table {
+    name: String,
+    origin: Origin,
+    columns: Vec<String>,
+    wavelengths_nm: Vec<f64>,
+    data: Vec<Vec<f64>>, // data[column][row]
+}
+
+/// A resolved spectrum with a label for messages and plots (`colorchecker:red`, `D65`, a path).
+#[derive(Debug, Clone)]
+pub struct NamedSpectrum {
+    pub label: String,
+    pub data: Tabulated,
+}
+
+impl Table {
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+    pub fn origin(&self) -> &Origin {
+        &self.origin
+    }
+    pub fn kind(&self) -> Option<Kind> {
+        match self.origin {
+            Origin::Builtin(k) => Some(k),
+            Origin::File(_) => None,
+        }
+    }
+    pub fn columns(&self) -> &[String] {
+        &self.columns
+    }
+    pub fn wavelengths_nm(&self) -> &[f64] {
+        &self.wavelengths_nm
+    }
+
+    /// Parses CSV text. `origin_path` names the file in error messages.
+    pub fn parse_csv(text: &str, name: &str, origin: Origin, origin_path: &Path) -> Result<Table> {
+        let err = |line: Option<usize>, message: String| Error::Parse {
+            file: origin_path.to_path_buf(),
+            line,
+            message,
+        };
+        let mut reader = csv::ReaderBuilder::new()
+            .has_headers(false)
+            .comment(Some(b'#'))
+            .flexible(true)
+            .trim(csv::Trim::All)
+            .from_reader(text.as_bytes());
+        let mut records = reader.records();
+        let header =
+            loop {
+                match records.next() {
+                    None => return Err(err(
+                        None,
+                        "empty file: expected a header `wavelength_nm,<column>,...` and data rows"
+                            .into(),
+                    )),
+                    Some(Err(e)) => {
+                        return Err(err(e.position().map(|p| p.line() as usize), e.to_string()))
+                    }
+                    Some(Ok(r)) if r.iter().all(|f| f.is_empty()) => continue,
+                    Some(Ok(r)) => break r,
+                }
+            };
+        let header_line = header.position().map(|p| p.line() as usize);
+        let first = header.get(0).unwrap_or("");
+        if !first.eq_ignore_ascii_case("wavelength_nm") {
+            let hint = if first.parse::<f64>().is_ok() {
+                " (the file has no header row)"
+            } else {
+                ""
+            };
+            return Err(err(
+                header_line,
+                format!(
+                    "the first column must be `wavelength_nm`, found '{first}'{hint}; \
+                     expected a header `wavelength_nm,<column>,...`"
+                ),
+            ));
+        }
+        let columns: Vec<String> = header.iter().skip(1).map(str::to_string).collect();
+        if columns.is_empty() {
+            return Err(err(
+                header_line,
+                "the header names no data column after wavelength_nm".into(),
+            ));
+        }
+        for (i, c) in columns.iter().enumerate() {
+            if c.is_empty() {
+                return Err(err(
+                    header_line,
+                    format!("column {} has an empty name", i + 2),
+                ));
+            }
+            if columns[..i].contains(c) {
+                return Err(err(header_line, format!("column name '{c}' appears twice")));
+            }
+        }
+        let mut wavelengths_nm: Vec<f64> = Vec::new();
+        let mut lines: Vec<usize> = Vec::new();
+        let mut data = vec![Vec::new(); columns.len()];
+        for record in records {
+            let record =
+                record.map_err(|e| err(e.position().map(|p| p.line() as usize), e.to_string()))?;
+            if record.iter().all(|f| f.is_empty()) {
+                continue;
+            }
+            let line = record.position().map(|p| p.line() as usize).unwrap_or(0);
+            if record.len() < columns.len() + 1 {
+                let missing = record.len();
+                return Err(err(
+                    Some(line),
+                    format!(
+                        "missing column {} ('{}'): the row has {} fields, the header {}",
+                        missing + 1,
+                        columns[missing - 1],
+                        record.len(),
+                        columns.len() + 1
+                    ),
+                ));
+            }
+            if record.len() > columns.len() + 1 {
+                return Err(err(
+                    Some(line),
+                    format!(
+                        "the row has {} fields but the header names only {}",
+                        record.len(),
+                        columns.len() + 1
+                    ),
+                ));
+            }
+            let number = |i: usize, field: &str| -> Result<f64> {
+                let col = if i == 0 {
+                    "wavelength_nm"
+                } else {
+                    &columns[i - 1]
+                };
+                let v: f64 = field.parse().map_err(|_| {
+                    err(
+                        Some(line),
+                        format!("column {} ('{col}'): '{field}' is not a number", i + 1),
+                    )
+                })?;
+                if !v.is_finite() {
+                    return Err(err(
+                        Some(line),
+                        format!(
+                            "column {} ('{col}'): {field} is not allowed (values must be finite)",
+                            i + 1
+                        ),
+                    ));
+                }
+                Ok(v)
+            };
+            let w = number(0, &record[0])?;
+            if let (Some(&prev), Some(&prev_line)) = (wavelengths_nm.last(), lines.last()) {
+                if w == prev {
+                    return Err(err(
+                        Some(line),
+                        format!("wavelength {w} nm repeats line {prev_line}"),
+                    ));
+                }
+                if w < prev {
+                    return Err(err(
+                        Some(line),
+                        format!(
+                            "wavelength {w} nm is below {prev} nm on line {prev_line}: \
+                             wavelengths must increase"
+                        ),
+                    ));
+                }
+            }
+            wavelengths_nm.push(w);
+            lines.push(line);
+            for (i, field) in record.iter().enumerate().skip(1) {
+                data[i - 1].push(number(i, field)?);
+            }
+        }
+        if wavelengths_nm.is_empty() {
+            return Err(err(None, "the file has a header but no data rows".into()));
+        }
+        let max = wavelengths_nm[wavelengths_nm.len() - 1];
+        if max < 50.0 || wavelengths_nm[0] <= 0.0 {
+            return Err(err(
+                lines.first().copied(),
+                format!(
+                    "wavelengths {}..{max} do not look like nanometres \
+                     (micrometres? convert them to nm)",
+                    wavelengths_nm[0]
+                ),
+            ));
+        }
+        Ok(Table {
+            name: name.to_string(),
+            origin,
+            columns,
+            wavelengths_nm,
+            data,
+        })
+    }
+
+    /// Reads a user CSV file.
+    pub fn from_file(path: &Path) -> Result<Table> {
+        let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let name = path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| path.display().to_string());
+        Table::parse_csv(&text, &name, Origin::File(path.to_path_buf()), path)
+    }
+
+    /// A built-in table by name (case-insensitive). Unknown names get the closest known ones.
+    pub fn builtin(name: &str) -> Result<Table> {
+        let (kind, canonical, text) = BUILTIN
+            .iter()
+            .find(|(_, n, _)| n.eq_ignore_ascii_case(name))
+            .ok_or_else(|| Error::NotFound {
+                message: format!("no built-in table named '{name}' (see `specmap data list`)"),
+                suggestions: closest(name, BUILTIN.iter().map(|(_, n, _)| *n)),
+            })?;
+        let kind = Kind::from_folder(kind);
+        let path = PathBuf::from(format!("spectra/{kind}/{canonical}.csv"));
+        Table::parse_csv(text, canonical, Origin::Builtin(kind), &path)
+    }
+
+    /// A table by built-in name or CSV path.
+    pub fn load(spec: &str) -> Result<Table> {
+        if looks_like_path(spec) {
+            Table::from_file(Path::new(spec))
+        } else {
+            Table::builtin(spec)
+        }
+    }
+
+    /// One column as tabulated spectral data.
+    pub fn column(&self, name: &str) -> Result<Tabulated> {
+        self.column_at(self.column_index(name)?)
+    }
+
+    /// The index of a column by name (exact, else case-insensitive); unknown names get the
+    /// closest known ones.
+    pub fn column_index(&self, name: &str) -> Result<usize> {
+        self.columns
+            .iter()
+            .position(|c| c == name)
+            .or_else(|| {
+                self.columns
+                    .iter()
+                    .position(|c| c.eq_ignore_ascii_case(name))
+            })
+            .ok_or_else(|| Error::NotFound {
+                message: format!(
+                    "table '{}' has no column '{name}' (it has: {})",
+                    self.name,
+                    self.columns.join(", ")
+                ),
+                suggestions: closest(name, self.columns.iter().map(String::as_str)),
+            })
+    }
+
+    /// Column `idx` (0-based, not counting the wavelength column).
+    pub fn column_at(&self, idx: usize) -> Result<Tabulated> {
+        Tabulated::new(self.wavelengths_nm.clone(), self.data[idx].clone())
+    }
+
+    /// The table's only column; an error naming the choices if it has several.
+    pub fn single_column(&self) -> Result<Tabulated> {
+        if self.columns.len() == 1 {
+            return self.column_at(0);
+        }
+        let examples: Vec<String> = self
+            .columns
+            .iter()
+            .take(4)
+            .map(|c| format!("{}:{c}", self.name))
+            .collect();
+        Err(Error::invalid(format!(
+            "table '{}' has {} columns; name one, e.g. {}",
+            self.name,
+            self.columns.len(),
+            examples.join(", ")
+        )))
+    }
+}
+
+/// Resolves `TABLE`, `TABLE:COLUMN`, `PATH` or `PATH:COLUMN` to one spectrum.
+pub fn spectrum(spec: &str) -> Result<NamedSpectrum> {
+    if spec.trim().is_empty() {
+        return Err(Error::invalid("an empty spectrum name"));
+    }
+    // A whole-spec file or table wins over a TABLE:COLUMN split.
+    let whole_is_file = Path::new(spec).is_file();
+    if let (false, Some((table, column))) = (whole_is_file, spec.rsplit_once(':')) {
+        if !table.is_empty() && !column.is_empty() {
+            let t = Table::load(table)?;
+            let idx = t.column_index(column)?;
+            return Ok(NamedSpectrum {
+                label: format!("{}:{}", t.name(), t.columns()[idx]),
+                data: t.column_at(idx)?,
+            });
+        }
+    }
+    let t = Table::load(spec)?;
+    Ok(NamedSpectrum {
+        label: t.name().to_string(),
+        data: t.single_column()?,
+    })
+}
+
+/// Every built-in table's kind and name, sorted by kind then name as stored.
+pub fn builtin_names() -> impl Iterator<Item = (Kind, &'static str)> {
+    let mut v: Vec<(Kind, &'static str)> = BUILTIN
+        .iter()
+        .map(|(k, n, _)| (Kind::from_folder(k), *n))
+        .collect();
+    v.sort_by(|a, b| a.0.cmp(&b.0).then_with(|| natural_cmp(a.1, b.1)));
+    v.into_iter()
+}
+
+/// True when `spec` names a file rather than a built-in table.
+fn looks_like_path(spec: &str) -> bool {
+    spec.contains('/')
+        || spec.contains('\\')
+        || spec.to_ascii_lowercase().ends_with(".csv")
+        || Path::new(spec).is_file()
+}
+
+/// Up to three known names within a small edit distance of `name`.
+fn closest<'a>(name: &str, known: impl Iterator<Item = &'a str>) -> Vec<String> {
+    let lower = name.to_ascii_lowercase();
+    let mut scored: Vec<(f64, &str)> = known
+        .map(|k| (strsim::jaro_winkler(&lower, &k.to_ascii_lowercase()), k))
+        .filter(|(s, _)| *s > 0.7)
+        .collect();
+    scored.sort_by(|a, b| b.0.total_cmp(&a.0));
+    scored
+        .into_iter()
+        .take(3)
+        .map(|(_, k)| k.to_string())
+        .collect()
+}
+
+/// Orders `FL2` before `FL10`.
+fn natural_cmp(a: &str, b: &str) -> std::cmp::Ordering {
+    fn key(s: &str) -> Vec<(String, u64)> {
+        let mut out = Vec::new();
+        let mut text = String::new();
+        let mut digits = String::new();
+        for c in s.chars() {
+            if c.is_ascii_digit() {
+                digits.push(c);
+            } else {
+                if !digits.is_empty() || !text.is_empty() {
+                    out.push((std::mem::take(&mut text), digits.parse().unwrap_or(0)));
+                    digits.clear();
+                }
+                text.push(c.to_ascii_lowercase());
+            }
+        }
+        out.push((text, digits.parse().unwrap_or(0)));
+        out
+    }
+    key(a).cmp(&key(b))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn builtins_parse_and_include_required_tables() {
+        for (kind, name) in builtin_names() {
+            let t = Table::builtin(name).unwrap_or_else(|e| panic!("{name}: {e}"));
+            assert_eq!(t.kind(), Some(kind));
+        }
+        for name in [
+            "cie1931",
+            "cie1964",
+            "A",
+            "D50",
+            "D55",
+            "D65",
+            "D75",
+            "E",
+            "FL1",
+            "FL12",
+            "HP1",
+            "HP5",
+            "LED-B1",
+            "LED-V2",
+            "lps",
+            "hps",
+            "incandescent",
+            "mercury",
+            "metal-halide",
+            "triphosphor-fl",
+            "phosphor-led",
+            "colorchecker",
+            "colorchecker-ohta",
+        ] {
+            assert!(Table::builtin(name).is_ok(), "missing built-in {name}");
+        }
+        let cc = Table::builtin("colorchecker").unwrap();
+        assert_eq!(cc.columns().len(), 24);
+        assert_eq!(cc.columns()[14], "red");
+        let cmf = Table::builtin("cie1931").unwrap();
+        assert_eq!(cmf.wavelengths_nm().first(), Some(&360.0));
+        assert_eq!(cmf.wavelengths_nm().last(), Some(&830.0));
+        assert_eq!(cmf.wavelengths_nm().len(), 471);
+    }
+
+    #[test]
+    fn names_resolve_case_insensitively_and_suggest() {
+        assert_eq!(spectrum("d65").unwrap().label, "D65");
+        assert_eq!(
+            spectrum("colorchecker:RED").unwrap().label,
+            "colorchecker:red"
+        );
+        match Table::builtin("D56").unwrap_err() {
+            Error::NotFound { suggestions, .. } => {
+                assert!(suggestions.contains(&"D65".into()) || suggestions.contains(&"D55".into()))
+            }
+            e => panic!("{e}"),
+        }
+        let e = spectrum("colorchecker").unwrap_err().to_string();
+        assert!(e.contains("colorchecker:dark-skin"), "{e}");
+        let e = spectrum("colorchecker:redd").unwrap_err().to_string();
+        assert!(e.contains("did you mean red"), "{e}");
+    }
+
+    #[test]
+    fn natural_order() {
+        let mut v = vec!["FL10", "FL2", "FL1", "A"];
+        v.sort_by(|a, b| natural_cmp(a, b));
+        assert_eq!(v, ["A", "FL1", "FL2", "FL10"]);
+    }
+}

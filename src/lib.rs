@@ -1,0 +1,15 @@
+//! specmap: spectral data toolkit and RGB -> spectral environment-map converter.
+//!
+//! The library knows nothing of the command line. Modules, from the ground up:
+//! - [`spectrum`]: wavelength grids, sampled spectra, resampling, integration rules;
+//! - [`data`]: built-in spectral tables and user CSV files;
+//! - [`colorimetry`]: SPD -> XYZ (the paper's Eq. 10/11), RGB spaces, CIELAB, CIEDE2000, CCT.
+
+pub mod colorimetry;
+pub mod data;
+pub mod error;
+pub mod io;
+pub mod plot;
+pub mod spectrum;
+
+pub use error::{Error, Result};

@@ -1,0 +1,182 @@
+//! Line plots of spectra to PNG or SVG (chosen by the file extension), with an embedded font so
+//! they render the same on any machine.
+
+use crate::error::{Error, Result};
+use plotters::prelude::*;
+use std::path::Path;
+use std::sync::Once;
+
+/// One curve: a label, its points and its colour (sRGB 8-bit).
+#[derive(Debug, Clone)]
+pub struct Series {
+    pub label: String,
+    pub points: Vec<(f64, f64)>,
+    pub color: [u8; 3],
+}
+
+/// What to draw around the curves.
+#[derive(Debug, Clone)]
+pub struct Figure {
+    pub title: String,
+    pub x_label: String,
+    pub y_label: String,
+    pub series: Vec<Series>,
+}
+
+static FONT: Once = Once::new();
+
+fn register_font() {
+    FONT.call_once(|| {
+        // DejaVu Sans (Bitstream Vera licence, assets/fonts/LICENSE-DejaVu.txt).
+        let bytes: &'static [u8] = include_bytes!("../assets/fonts/DejaVuSans.ttf");
+        // Registration fails only for a malformed font, which a test catches.
+        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, bytes);
+    });
+}
+
+/// Writes the figure to `path` (.png or .svg) through a temporary file renamed into place.
+pub fn write(figure: &Figure, path: &Path) -> Result<()> {
+    register_font();
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    let tmp = crate::io::temp_path_for(path)?;
+    let size = (960, 600);
+    let drawn = match ext.as_str() {
+        "png" => draw(figure, BitMapBackend::new(&tmp, size).into_drawing_area()),
+        "svg" => draw(figure, SVGBackend::new(&tmp, size).into_drawing_area()),
+        _ => {
+            return Err(Error::invalid(format!(
+                "{}: plots are written as .png or .svg",
+                path.display()
+            )))
+        }
+    };
+    match drawn {
+        Ok(()) => crate::io::rename_into_place(&tmp, path),
+        Err(e) => {
+            let _ = std::fs::remove_file(&tmp);
+            Err(Error::invalid(format!(
+                "{}: cannot draw the plot: {e}",
+                path.display()
+            )))
+        }
+    }
+}
+
+fn draw<DB: DrawingBackend>(
+    figure: &Figure,
+    root: DrawingArea<DB, plotters::coord::Shift>,
+) -> std::result::Result<(), String>
+where
+    DB::ErrorType: 'static,
+{
+    let e = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+    root.fill(&WHITE).map_err(e)?;
+    let all = figure.series.iter().flat_map(|s| s.points.iter());
+    let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, 0.0f64, f64::MIN);
+    for &(x, y) in all {
+        x0 = x0.min(x);
+        x1 = x1.max(x);
+        y0 = y0.min(y);
+        y1 = y1.max(y);
+    }
+    if x0 >= x1 {
+        x1 = x0 + 1.0;
+    }
+    if y1 <= y0 {
+        y1 = y0 + 1.0;
+    }
+    let pad = 0.05 * (y1 - y0);
+    let mut chart = ChartBuilder::on(&root)
+        .caption(&figure.title, ("sans-serif", 24))
+        .margin(16)
+        .x_label_area_size(44)
+        .y_label_area_size(64)
+        .build_cartesian_2d(x0..x1, (y0 - if y0 < 0.0 { pad } else { 0.0 })..(y1 + pad))
+        .map_err(e)?;
+    chart
+        .configure_mesh()
+        .x_desc(&figure.x_label)
+        .y_desc(&figure.y_label)
+        .label_style(("sans-serif", 14))
+        .draw()
+        .map_err(e)?;
+    for s in &figure.series {
+        let c = RGBColor(s.color[0], s.color[1], s.color[2]);
+        chart
+            .draw_series(LineSeries::new(s.points.iter().copied(), c.stroke_width(2)))
+            .map_err(e)?
+            .label(s.label.clone())
+            .legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], c.stroke_width(3)));
+    }
+    if figure.series.len() > 1 {
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK.mix(0.3))
+            .label_font(("sans-serif", if figure.series.len() > 12 { 10 } else { 13 }))
+            .position(SeriesLabelPosition::UpperRight)
+            .draw()
+            .map_err(e)?;
+    }
+    root.present().map_err(e)?;
+    Ok(())
+}
+
+/// A distinct colour for curve `i` of `n` when the data have no colour of their own.
+pub fn palette(i: usize) -> [u8; 3] {
+    const P: [[u8; 3]; 10] = [
+        [31, 119, 180],
+        [255, 127, 14],
+        [44, 160, 44],
+        [214, 39, 40],
+        [148, 103, 189],
+        [140, 86, 75],
+        [227, 119, 194],
+        [127, 127, 127],
+        [188, 189, 34],
+        [23, 190, 207],
+    ];
+    P[i % P.len()]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn writes_png_and_svg_and_refuses_other_formats() {
+        let dir = tempfile::tempdir().unwrap();
+        let fig = Figure {
+            title: "test".into(),
+            x_label: "Wavelength (nm)".into(),
+            y_label: "value".into(),
+            series: vec![
+                Series {
+                    label: "a".into(),
+                    points: vec![(400.0, 0.1), (700.0, 0.9)],
+                    color: palette(0),
+                },
+                Series {
+                    label: "b".into(),
+                    points: vec![(400.0, 0.5), (700.0, 0.2)],
+                    color: palette(1),
+                },
+            ],
+        };
+        for ext in ["png", "svg"] {
+            let p = dir.path().join(format!("f.{ext}"));
+            write(&fig, &p).unwrap();
+            let bytes = std::fs::read(&p).unwrap();
+            assert!(bytes.len() > 1000, "{ext}: {} bytes", bytes.len());
+        }
+        assert!(std::fs::read(dir.path().join("f.svg"))
+            .map(|b| String::from_utf8_lossy(&b).contains("Wavelength"))
+            .unwrap());
+        assert!(write(&fig, &dir.path().join("f.jpg")).is_err());
+        // Nothing but the two plots is left behind (no temporary files).
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
+    }
+}

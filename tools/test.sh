@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# The whole test suite, from a fresh clone: installs what the tests need, then runs
+# formatting and lint checks, the Rust unit and integration tests, and the Python interop tests
+# that compare specmap with independent references (colour-science, tmm, OpenEXR).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+export CARGO_TERM_COLOR="${CARGO_TERM_COLOR:-never}"
+
+step() { printf '\n== %s\n' "$*"; }
+
+step "Python venv for the interop tests (.venv)"
+if ! .venv/bin/python -c "import colour, tmm, OpenEXR, pytest, scipy" 2>/dev/null \
+   || ! cmp -s tests/interop/requirements.txt .venv/.requirements 2>/dev/null; then
+  python3 -m venv .venv
+  .venv/bin/pip install --quiet --disable-pip-version-check --upgrade pip
+  .venv/bin/pip install --quiet --disable-pip-version-check -r tests/interop/requirements.txt
+  cp tests/interop/requirements.txt .venv/.requirements
+fi
+.venv/bin/python -c "import colour; print('colour-science', colour.__version__)"
+
+step "cargo fmt --check"
+cargo fmt --all -- --check
+
+step "cargo clippy --all-targets -D warnings"
+cargo clippy --all-targets --quiet -- -D warnings
+
+step "cargo test (unit + integration)"
+cargo test --all-targets --quiet 2>&1 | tee target/cargo-test.log
+# Doc tests too (examples in the docs must compile and pass).
+cargo test --doc --quiet
+
+step "interop tests (pytest)"
+SPECMAP_BIN="$PWD/target/debug/specmap" .venv/bin/python -m pytest tests/interop -q -p no:cacheprovider
