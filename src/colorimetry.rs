@@ -20,6 +20,15 @@ pub enum Observer {
     Cie1964,
 }
 
+impl std::fmt::Display for Observer {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Observer::Cie1931 => "CIE 1931 2°",
+            Observer::Cie1964 => "CIE 1964 10°",
+        })
+    }
+}
+
 impl Observer {
     pub fn table_name(self) -> &'static str {
         match self {

@@ -3,7 +3,9 @@
 //! The library knows nothing of the command line. Modules, from the ground up:
 //! - [`spectrum`]: wavelength grids, sampled spectra, resampling, integration rules;
 //! - [`data`]: built-in spectral tables and user CSV files;
-//! - [`colorimetry`]: SPD -> XYZ (the paper's Eq. 10/11), RGB spaces, CIELAB, CIEDE2000, CCT.
+//! - [`colorimetry`]: SPD -> XYZ (the paper's Eq. 10/11), RGB spaces, CIELAB, CIEDE2000, CCT;
+//! - [`thinfilm`]: multilayer thin-film interference (paper Eq. 2-9 for N layers);
+//! - [`plot`], [`io`]: PNG/SVG plots and safe (temporary file + rename) output.
 
 pub mod colorimetry;
 pub mod data;
@@ -11,5 +13,6 @@ pub mod error;
 pub mod io;
 pub mod plot;
 pub mod spectrum;
+pub mod thinfilm;
 
 pub use error::{Error, Result};

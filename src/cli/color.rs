@@ -1,11 +1,11 @@
 //! `specmap color`: the colour of a light, or of a reflectance under a light.
 
 use super::outln;
-use super::{ObserverArg, RuleArg, SpaceArg};
+use super::SpaceArg;
 use clap::Args;
 use specmap::colorimetry::{cct, srgb8, Cmfs, Lab, Observer, RgbSpace, Xyz, D65_XY};
 use specmap::data;
-use specmap::spectrum::{Interpolation, Rule, WavelengthGrid};
+use specmap::spectrum::{Interpolation, Rule};
 
 #[derive(Debug, Args)]
 pub struct ColorArgs {
@@ -15,15 +15,8 @@ pub struct ColorArgs {
     /// Light for a reflectance (paper Eq. 11: k = 100 / integral(S * ybar)).
     #[arg(long, value_name = "LIGHT")]
     under: Option<String>,
-    /// Standard observer.
-    #[arg(long, value_enum, default_value_t = ObserverArg::Cie1931)]
-    observer: ObserverArg,
-    /// Wavelength range START:END:STEP in nm.
-    #[arg(long, default_value = "380:780:1")]
-    range: WavelengthGrid,
-    /// Integration rule.
-    #[arg(long, value_enum, default_value_t = RuleArg::Riemann)]
-    rule: RuleArg,
+    #[command(flatten)]
+    spectral: super::SpectralArgs,
     /// RGB space for `linear_rgb` (linear_srgb and srgb8 are always sRGB).
     #[arg(long, value_enum, default_value_t = SpaceArg::Srgb)]
     space: SpaceArg,
@@ -33,22 +26,23 @@ pub struct ColorArgs {
 }
 
 pub fn run(a: ColorArgs) -> anyhow::Result<()> {
-    let observer = Observer::from(a.observer);
-    let rule = Rule::from(a.rule);
+    let observer = Observer::from(a.spectral.observer);
+    let rule = Rule::from(a.spectral.rule);
+    let range = a.spectral.range;
     let space = RgbSpace::from(a.space);
-    let cmfs = Cmfs::new(observer, &a.range)?;
+    let cmfs = Cmfs::new(observer, &range)?;
     let spd = data::spectrum(&a.spd)?;
     let (xyz, white, under_label) = match &a.under {
         Some(light) => {
             let light = data::spectrum(light)?;
-            let s = light.data.resample(&a.range, Interpolation::LIGHT);
-            let r = spd.data.resample(&a.range, Interpolation::SMOOTH);
+            let s = light.data.resample(&range, Interpolation::LIGHT);
+            let r = spd.data.resample(&range, Interpolation::SMOOTH);
             let xyz = cmfs.reflectance_xyz(&r, &s, rule)?;
             let white = cmfs.light_xyz(&s, rule)?;
             (xyz, white, Some(light.label))
         }
         None => {
-            let s = spd.data.resample(&a.range, Interpolation::LIGHT);
+            let s = spd.data.resample(&range, Interpolation::LIGHT);
             (cmfs.light_xyz(&s, rule)?, Xyz::from_xy(D65_XY), None)
         }
     };
@@ -65,7 +59,7 @@ pub fn run(a: ColorArgs) -> anyhow::Result<()> {
             "spd": spd.label,
             "under": under_label,
             "observer": observer,
-            "range": a.range.to_string(),
+            "range": range.to_string(),
             "rule": rule,
             "XYZ": xyz.0,
             "xy": xy,
@@ -86,20 +80,9 @@ pub fn run(a: ColorArgs) -> anyhow::Result<()> {
         Some(l) => format!("{} under {l}", spd.label),
         None => format!("{} (as a light, Y = 100)", spd.label),
     };
-    let obs = match observer {
-        Observer::Cie1931 => "CIE 1931 2°",
-        Observer::Cie1964 => "CIE 1964 10°",
-    };
     let mut out = String::new();
-    outln!(out, "{what}\n  {obs}, {} nm, {rule} rule", a.range);
-    outln!(
-        out,
-        "  XYZ          {:>10.4} {:>10.4} {:>10.4}",
-        xyz.x(),
-        xyz.y(),
-        xyz.z()
-    );
-    outln!(out, "  xy           {:>10.5} {:>10.5}", xy[0], xy[1]);
+    outln!(out, "{what}\n  {observer}, {} nm, {rule} rule", range);
+    super::write_xyz(&mut out, xyz);
     match temperature.kelvin {
         Some(k) => outln!(
             out,
@@ -134,16 +117,7 @@ pub fn run(a: ColorArgs) -> anyhow::Result<()> {
             linear_rgb[2]
         );
     }
-    outln!(
-        out,
-        "  sRGB 8-bit   {:>10} {:>10} {:>10}   #{:02X}{:02X}{:02X}",
-        code[0],
-        code[1],
-        code[2],
-        code[0],
-        code[1],
-        code[2]
-    );
+    super::write_srgb8(&mut out, code);
     outln!(
         out,
         "  CIELAB       {:>10.4} {:>10.4} {:>10.4}",

@@ -2,6 +2,16 @@
 
 mod color;
 mod data;
+mod thinfilm;
+
+/// `writeln!` into a String (infallible).
+macro_rules! outln {
+    ($dst:expr, $($arg:tt)*) => {{
+        use std::fmt::Write as _;
+        let _ = writeln!($dst, $($arg)*);
+    }};
+}
+pub(crate) use outln;
 
 use clap::{Parser, Subcommand, ValueEnum};
 use specmap::colorimetry::{Observer, RgbSpace};
@@ -13,6 +23,7 @@ Examples:
   specmap data show D65 --range 380:780:5 --plot d65.png
   specmap color colorchecker:red --under D65 --json
   specmap color my_lamp.csv
+  specmap thinfilm --layers 2.7:270 --substrate 1.45 --json
 
 A spectrum is a built-in table name (see `specmap data list`), TABLE:COLUMN
 (e.g. colorchecker:red) or a CSV file with the header `wavelength_nm,<column>,...`.";
@@ -32,13 +43,52 @@ enum Command {
     Data(data::DataCommand),
     /// Colour of a spectrum: XYZ (paper Eq. 10/11), xy, CCT, linear RGB, 8-bit sRGB, CIELAB.
     Color(color::ColorArgs),
+    /// Multilayer thin film: R and T spectra (paper Eq. 2-9, N layers) and the reflected colour.
+    Thinfilm(thinfilm::ThinfilmArgs),
 }
 
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Data(c) => data::run(c),
         Command::Color(a) => color::run(a),
+        Command::Thinfilm(a) => thinfilm::run(a),
     }
+}
+
+/// The options every colour computation shares: observer, wavelength grid, integration rule.
+#[derive(Debug, Clone, clap::Args)]
+pub struct SpectralArgs {
+    /// Standard observer.
+    #[arg(long, value_enum, default_value_t = ObserverArg::Cie1931)]
+    pub observer: ObserverArg,
+    /// Wavelength range START:END:STEP in nm.
+    #[arg(long, default_value = "380:780:1")]
+    pub range: specmap::spectrum::WavelengthGrid,
+    /// Integration rule.
+    #[arg(long, value_enum, default_value_t = RuleArg::Riemann)]
+    pub rule: RuleArg,
+}
+
+/// Appends the XYZ and xy lines of the human-readable colour summaries.
+pub fn write_xyz(out: &mut String, xyz: specmap::colorimetry::Xyz) {
+    let xy = xyz.xy();
+    outln!(
+        out,
+        "  XYZ          {:>10.4} {:>10.4} {:>10.4}",
+        xyz.x(),
+        xyz.y(),
+        xyz.z()
+    );
+    outln!(out, "  xy           {:>10.5} {:>10.5}", xy[0], xy[1]);
+}
+
+/// Appends the 8-bit sRGB line (with its hex code).
+pub fn write_srgb8(out: &mut String, code: [u8; 3]) {
+    let [r, g, b] = code;
+    outln!(
+        out,
+        "  sRGB 8-bit   {r:>10} {g:>10} {b:>10}   #{r:02X}{g:02X}{b:02X}"
+    );
 }
 
 /// CIE standard observers.
@@ -120,12 +170,3 @@ pub fn emit(text: &str) {
         std::process::exit(1);
     }
 }
-
-/// `writeln!` into a String (infallible).
-macro_rules! outln {
-    ($dst:expr, $($arg:tt)*) => {{
-        use std::fmt::Write as _;
-        let _ = writeln!($dst, $($arg)*);
-    }};
-}
-pub(crate) use outln;
