@@ -4,12 +4,14 @@
 //! - [`spectrum`]: wavelength grids, sampled spectra, resampling, integration rules;
 //! - [`data`]: built-in spectral tables and user CSV files;
 //! - [`colorimetry`]: SPD -> XYZ (the paper's Eq. 10/11), RGB spaces, CIELAB, CIEDE2000, CCT;
+//! - [`fit`]: the paper's per-light basis weights, exact and non-negative modes, the round trip;
 //! - [`thinfilm`]: multilayer thin-film interference (paper Eq. 2-9 for N layers);
 //! - [`plot`], [`io`]: PNG/SVG plots and safe (temporary file + rename) output.
 
 pub mod colorimetry;
 pub mod data;
 pub mod error;
+pub mod fit;
 pub mod io;
 pub mod plot;
 pub mod spectrum;

@@ -257,3 +257,73 @@ fn data_show_writes_plots_and_refuses_unknown_formats() {
         "no temporary file left"
     );
 }
+
+#[test]
+fn fit_refuses_bad_lights_and_dependent_bases() {
+    let d = tempfile::tempdir().unwrap();
+    let dark = write(d.path(), "dark.csv", "wavelength_nm,p\n380,0\n780,0\n");
+    let out = specmap(&["fit", "--light", dark.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1));
+    assert_mentions(
+        &String::from_utf8_lossy(&out.stderr),
+        &["no visible energy"],
+    );
+    let neg = write(
+        d.path(),
+        "neg.csv",
+        "wavelength_nm,p\n380,1\n500,-0.5\n780,1\n",
+    );
+    let out = specmap(&["fit", "--light", neg.to_str().unwrap()]);
+    assert_mentions(&String::from_utf8_lossy(&out.stderr), &["negative", "nm"]);
+    // Two copies of one patch cannot carry three channels.
+    let out = specmap(&[
+        "fit",
+        "--light",
+        "D65",
+        "--basis",
+        "colorchecker:red,colorchecker:red,colorchecker:blue",
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    assert_mentions(
+        &String::from_utf8_lossy(&out.stderr),
+        &["linearly dependent"],
+    );
+    let out = specmap(&["fit", "--light", "D65", "--basis", "colorchecker:red"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert_mentions(&String::from_utf8_lossy(&out.stderr), &["three spectra"]);
+}
+
+#[test]
+fn fit_writes_a_versioned_file_and_a_plot() {
+    let d = tempfile::tempdir().unwrap();
+    let json = d.path().join("fit.json");
+    let svg = d.path().join("basis.svg");
+    let out = specmap(&[
+        "fit",
+        "--light",
+        "A",
+        "--mode",
+        "exact",
+        "-o",
+        json.to_str().unwrap(),
+        "--plot",
+        svg.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let f: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    assert_eq!(f["version"], 1);
+    assert_eq!(f["mode"], "exact");
+    assert_eq!(f["light_spd"].as_array().unwrap().len(), 401);
+    assert_eq!(f["basis_reflectance"][2].as_array().unwrap().len(), 401);
+    assert!(std::fs::read_to_string(&svg).unwrap().contains("<svg"));
+    // Several lights print a table; -o with several is refused.
+    let out = specmap(&["fit", "--light", "D65,lps", "--mode", "paper,exact"]);
+    assert!(out.status.success());
+    assert_eq!(String::from_utf8_lossy(&out.stdout).lines().count(), 2 + 4);
+    let out = specmap(&["fit", "--light", "D65,A", "-o", json.to_str().unwrap()]);
+    assert!(!out.status.success());
+}

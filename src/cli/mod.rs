@@ -2,6 +2,7 @@
 
 mod color;
 mod data;
+mod fit;
 mod thinfilm;
 
 /// `writeln!` into a String (infallible).
@@ -23,6 +24,7 @@ Examples:
   specmap data show D65 --range 380:780:5 --plot d65.png
   specmap color colorchecker:red --under D65 --json
   specmap color my_lamp.csv
+  specmap fit --light FL2 --mode exact -o fit.json --plot basis.png
   specmap thinfilm --layers 2.7:270 --substrate 1.45 --json
 
 A spectrum is a built-in table name (see `specmap data list`), TABLE:COLUMN
@@ -43,6 +45,8 @@ enum Command {
     Data(data::DataCommand),
     /// Colour of a spectrum: XYZ (paper Eq. 10/11), xy, CCT, linear RGB, 8-bit sRGB, CIELAB.
     Color(color::ColorArgs),
+    /// Fit the paper's basis weights w_R, w_G, w_B for a main light; exact and non-negative modes.
+    Fit(fit::FitArgs),
     /// Multilayer thin film: R and T spectra (paper Eq. 2-9, N layers) and the reflected colour.
     Thinfilm(thinfilm::ThinfilmArgs),
 }
@@ -51,6 +55,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Data(c) => data::run(c),
         Command::Color(a) => color::run(a),
+        Command::Fit(a) => fit::run(a),
         Command::Thinfilm(a) => thinfilm::run(a),
     }
 }

@@ -1,0 +1,343 @@
+//! `specmap fit`: the paper's basis weights for a main light, and the exact mode.
+
+use super::{outln, SpaceArg};
+use anyhow::Context;
+use clap::{Args, ValueEnum};
+use specmap::colorimetry::{Observer, RgbSpace};
+use specmap::data;
+use specmap::fit::{self, FitInput, Mode};
+use specmap::plot::{self, Figure, Series};
+use specmap::spectrum::{Interpolation, Rule};
+use std::path::PathBuf;
+
+#[derive(Debug, Args)]
+pub struct FitArgs {
+    /// The main light: a table name or CSV (e.g. D65, A, FL2, lps). Several, comma-separated,
+    /// print a comparison table.
+    #[arg(long, value_delimiter = ',', required = true)]
+    light: Vec<String>,
+    /// How RGB becomes a spectrum. Several, comma-separated, print a comparison table.
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "paper")]
+    mode: Vec<ModeArg>,
+    /// The three basis reflectances for R, G and B.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "colorchecker:red,colorchecker:green,colorchecker:blue"
+    )]
+    basis: Vec<String>,
+    /// The RGB space the weights are solved in.
+    #[arg(long, value_enum, default_value_t = SpaceArg::Srgb)]
+    space: SpaceArg,
+    #[command(flatten)]
+    spectral: super::SpectralArgs,
+    /// Write the fit (versioned JSON: basis spectra, grid, light, weights, matrix) to this file.
+    #[arg(short, long, value_name = "FIT.json")]
+    output: Option<PathBuf>,
+    /// Plot the three weighted basis spectra and the light (.png or .svg).
+    #[arg(long, value_name = "OUT")]
+    plot: Option<PathBuf>,
+    /// Also show the basis coefficients, SPD and round-trip error of one linear RGB colour.
+    #[arg(long, value_delimiter = ',', value_name = "R,G,B")]
+    rgb: Option<Vec<f64>>,
+    /// Machine-readable summary.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum ModeArg {
+    /// the paper's three weights (exact for white only)
+    Paper,
+    /// a full 3x3 matrix: the round trip is exact for every colour (the SPD may go negative)
+    Exact,
+    /// exact where the SPD stays non-negative, else the non-negative SPD of least CIEDE2000 error
+    Nonneg,
+}
+
+pub fn run(a: FitArgs) -> anyhow::Result<()> {
+    if a.basis.len() != 3 {
+        anyhow::bail!(
+            "--basis takes three spectra (for R, G and B), comma-separated; got {}: {}",
+            a.basis.len(),
+            a.basis.join(",")
+        );
+    }
+    if a.rgb.as_ref().is_some_and(|v| v.len() != 3) {
+        anyhow::bail!("--rgb takes three comma-separated values, e.g. --rgb 1,0.5,0.2");
+    }
+    let space = RgbSpace::from(a.space);
+    let basis: Vec<data::NamedSpectrum> = a
+        .basis
+        .iter()
+        .map(|b| data::spectrum(b))
+        .collect::<Result<_, _>>()?;
+    let modes: Vec<Mode> = a
+        .mode
+        .iter()
+        .map(|m| match m {
+            ModeArg::Paper => Mode::Paper,
+            ModeArg::Exact => Mode::Exact,
+            ModeArg::Nonneg => Mode::Nonneg,
+        })
+        .collect();
+    let mut fits = Vec::new();
+    for name in &a.light {
+        let light = data::spectrum(name)?;
+        let input = FitInput {
+            light_label: light.label.clone(),
+            light: light.data.resample(&a.spectral.range, Interpolation::LIGHT),
+            basis_labels: [0, 1, 2].map(|i| basis[i].label.clone()),
+            basis: [0, 1, 2].map(|i| {
+                basis[i]
+                    .data
+                    .resample(&a.spectral.range, Interpolation::SMOOTH)
+            }),
+            observer: Observer::from(a.spectral.observer),
+            rule: Rule::from(a.spectral.rule),
+            space,
+        };
+        for &mode in &modes {
+            let f = fit::fit(&input, mode)
+                .with_context(|| format!("fitting the basis for {}", light.label))?;
+            let rt = fit::round_trip(&f, 17, &space);
+            fits.push((f, rt));
+        }
+    }
+    if fits.len() > 1 {
+        if a.output.is_some() || a.plot.is_some() || a.rgb.is_some() {
+            anyhow::bail!("-o, --plot and --rgb take one light and one mode");
+        }
+        return table(&fits, a.json);
+    }
+    let (f, rt) = fits.pop().expect("one light and one mode");
+    let pixel = match &a.rgb {
+        Some(v) => {
+            let rgb = [v[0], v[1], v[2]];
+            if rgb.iter().any(|x| !x.is_finite() || *x < 0.0) {
+                anyhow::bail!("--rgb {rgb:?}: linear RGB values must be finite and non-negative");
+            }
+            let up = fit::Upsampler::new(&f, &space);
+            let coefficients = up.coefficients(rgb);
+            let spd = up.spd(rgb);
+            Some(serde_json::json!({
+                "rgb": rgb,
+                "coefficients": coefficients,
+                "rendered_rgb": up.rendered_rgb(coefficients),
+                "dE2000": up.round_trip_error(rgb, coefficients),
+                "min_spd": spd.iter().cloned().fold(f64::INFINITY, f64::min),
+                "spd": spd,
+            }))
+        }
+        None => None,
+    };
+
+    if let Some(path) = &a.output {
+        let text = serde_json::to_string_pretty(&f)?;
+        specmap::io::write_atomic(path, text.as_bytes())?;
+        eprintln!("wrote {}", path.display());
+    }
+    if let Some(path) = &a.plot {
+        let grid = a.spectral.range;
+        let w: Vec<f64> = grid.wavelengths_nm().collect();
+        let max_light = f.light_spd.iter().cloned().fold(0.0, f64::max).max(1e-300);
+        let basis = f.weighted_basis();
+        let max_basis = basis
+            .iter()
+            .flatten()
+            .cloned()
+            .fold(0.0, f64::max)
+            .max(1e-300);
+        let mut series: Vec<Series> = ["R", "G", "B"]
+            .iter()
+            .zip(&basis)
+            .zip([[200, 30, 30], [30, 150, 30], [30, 60, 200]])
+            .zip(&f.basis)
+            .map(|(((c, b), color), label)| Series {
+                label: format!("w_{c} · {label} · {}", f.light),
+                points: w
+                    .iter()
+                    .copied()
+                    .zip(b.iter().map(|v| v / max_basis))
+                    .collect(),
+                color,
+            })
+            .collect();
+        series.push(Series {
+            label: format!("{} (scaled)", f.light),
+            points: w
+                .iter()
+                .copied()
+                .zip(f.light_spd.iter().map(|v| v / max_light))
+                .collect(),
+            color: [120, 120, 120],
+        });
+        plot::write(
+            &Figure {
+                title: format!(
+                    "Fitted basis under {} (w = {:.4}, {:.4}, {:.4})",
+                    f.light, f.weights[0], f.weights[1], f.weights[2]
+                ),
+                x_label: "Wavelength (nm)".into(),
+                y_label: "Relative spectral power".into(),
+                series,
+            },
+            path,
+        )?;
+        eprintln!("wrote {}", path.display());
+    }
+
+    if a.json {
+        let doc = serde_json::json!({
+            "light": f.light,
+            "mode": f.mode,
+            "basis": f.basis,
+            "space": f.space,
+            "observer": f.observer,
+            "range": f.grid.to_string(),
+            "rule": f.rule,
+            "weights": f.weights,
+            "matrix": f.matrix,
+            "condition_number": f.condition_number,
+            "regularized": f.regularized,
+            "lost_information": f.lost_information,
+            "light_rgb": f.light_rgb,
+            "closed_form": f.weights,
+            "argmin": f.argmin,
+            "roundtrip": rt,
+            "pixel": pixel,
+        });
+        super::emit(&(serde_json::to_string_pretty(&doc)? + "\n"));
+        return Ok(());
+    }
+    let mut out = String::new();
+    outln!(
+        out,
+        "{} fit under {} ({}, {} nm, {})",
+        mode_name(f.mode),
+        f.light,
+        f.space,
+        f.grid,
+        f.rule
+    );
+    outln!(out, "  basis           {}", f.basis.join(", "));
+    outln!(
+        out,
+        "  weights         wR {:.10}  wG {:.10}  wB {:.10}",
+        f.weights[0],
+        f.weights[1],
+        f.weights[2]
+    );
+    outln!(
+        out,
+        "  argmin          wR {:.10}  wG {:.10}  wB {:.10}  ({} iterations, max |difference| {:.1e})",
+        f.argmin.weights[0], f.argmin.weights[1], f.argmin.weights[2], f.argmin.iterations,
+        f.argmin.max_abs_difference
+    );
+    if f.mode != Mode::Paper {
+        for (i, row) in f.matrix.iter().enumerate() {
+            outln!(
+                out,
+                "  {}  {:>12.6} {:>12.6} {:>12.6}",
+                if i == 0 {
+                    "matrix W    "
+                } else {
+                    "            "
+                },
+                row[0],
+                row[1],
+                row[2]
+            );
+        }
+    }
+    outln!(
+        out,
+        "  light RGB       {:.6} {:.6} {:.6}",
+        f.light_rgb[0],
+        f.light_rgb[1],
+        f.light_rgb[2]
+    );
+    outln!(
+        out,
+        "  condition       {:.4e}{}",
+        f.condition_number,
+        if f.regularized {
+            "   (singular: reduced solution)"
+        } else {
+            ""
+        }
+    );
+    if let Some(lost) = &f.lost_information {
+        outln!(out, "  note            {lost}");
+    }
+    outln!(
+        out,
+        "  round trip      {} colours: CIEDE2000 mean {:.4}, p95 {:.4}, max {:.4}; negative SPD for {:.1}%",
+        rt.colours, rt.mean_de2000, rt.p95_de2000, rt.max_de2000, 100.0 * rt.negative_fraction
+    );
+    if let Some(p) = &pixel {
+        outln!(
+            out,
+            "  rgb {}  coefficients {}, rendered {}, CIEDE2000 {:.4}, min SPD {:.3e}",
+            p["rgb"],
+            p["coefficients"],
+            p["rendered_rgb"],
+            p["dE2000"].as_f64().unwrap_or(f64::NAN),
+            p["min_spd"].as_f64().unwrap_or(f64::NAN)
+        );
+    }
+    super::emit(&out);
+    Ok(())
+}
+
+fn summary(f: &fit::Fit, rt: &fit::RoundTrip) -> serde_json::Value {
+    serde_json::json!({
+        "light": f.light,
+        "mode": f.mode,
+        "weights": f.weights,
+        "condition_number": f.condition_number,
+        "regularized": f.regularized,
+        "light_rgb": f.light_rgb,
+        "argmin_max_abs_difference": f.argmin.max_abs_difference,
+        "roundtrip": rt,
+    })
+}
+
+/// Several lights and modes side by side: markdown, or a JSON array.
+fn table(fits: &[(fit::Fit, fit::RoundTrip)], json: bool) -> anyhow::Result<()> {
+    if json {
+        let rows: Vec<_> = fits.iter().map(|(f, rt)| summary(f, rt)).collect();
+        super::emit(&(serde_json::to_string_pretty(&rows)? + "\n"));
+        return Ok(());
+    }
+    let mut out = String::new();
+    outln!(out, "| light | mode | w_R | w_G | w_B | condition | reduced | mean ΔE00 | p95 ΔE00 | max ΔE00 | negative SPD |");
+    outln!(out, "|---|---|---:|---:|---:|---:|---|---:|---:|---:|---:|");
+    for (f, rt) in fits {
+        outln!(
+            out,
+            "| {} | {} | {:.4} | {:.4} | {:.4} | {:.3e} | {} | {:.4} | {:.4} | {:.4} | {:.1}% |",
+            f.light,
+            mode_name(f.mode),
+            f.weights[0],
+            f.weights[1],
+            f.weights[2],
+            f.condition_number,
+            if f.regularized { "yes" } else { "no" },
+            rt.mean_de2000,
+            rt.p95_de2000,
+            rt.max_de2000,
+            100.0 * rt.negative_fraction
+        );
+    }
+    super::emit(&out);
+    Ok(())
+}
+
+fn mode_name(m: Mode) -> &'static str {
+    match m {
+        Mode::Paper => "paper",
+        Mode::Exact => "exact",
+        Mode::Nonneg => "nonneg",
+    }
+}
