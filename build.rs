@@ -7,7 +7,7 @@ fn main() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("spectra");
     println!("cargo:rerun-if-changed={}", root.display());
     let mut entries = Vec::new();
-    for kind in ["cmf", "illuminant", "light", "reflectance"] {
+    for kind in ["cmf", "illuminant", "light", "reflectance", "basis"] {
         let dir = root.join(kind);
         println!("cargo:rerun-if-changed={}", dir.display());
         let mut files: Vec<_> = std::fs::read_dir(&dir)

@@ -24,6 +24,8 @@ pub enum Kind {
     Light,
     /// Surface reflectances.
     Reflectance,
+    /// Basis functions that generate spectra (the CIE daylight S0, S1, S2).
+    Basis,
 }
 
 impl Kind {
@@ -32,6 +34,7 @@ impl Kind {
             "cmf" => Kind::Cmf,
             "illuminant" => Kind::Illuminant,
             "light" => Kind::Light,
+            "basis" => Kind::Basis,
             _ => Kind::Reflectance,
         }
     }
@@ -44,6 +47,7 @@ impl fmt::Display for Kind {
             Kind::Illuminant => "illuminant",
             Kind::Light => "light",
             Kind::Reflectance => "reflectance",
+            Kind::Basis => "basis",
         })
     }
 }

@@ -10,8 +10,10 @@
 
 pub mod colorimetry;
 pub mod data;
+pub mod envmap;
 pub mod error;
 pub mod fit;
+pub mod illuminant;
 pub mod io;
 pub mod plot;
 pub mod spectrum;

@@ -86,6 +86,11 @@ def main():
         wl = sds[0].wavelengths
         write("reflectance", short, wl, {p: sd.values for p, sd in zip(PATCHES, sds)})
 
+    basis = colour.colorimetry.SDS_BASIS_FUNCTIONS_CIE_ILLUMINANT_D_SERIES
+    s0 = basis["S0"]
+    write("basis", "cie-daylight", s0.wavelengths,
+          {k: basis[k].values for k in ("S0", "S1", "S2")})
+
     print("light sources:")
     for s, name in sorted(seen.items()):
         print(f"| `{s}` | {name} |")

@@ -1,8 +1,8 @@
 //! `specmap fit`: the paper's basis weights for a main light, and the exact mode.
 
-use super::{outln, SpaceArg};
+use super::{outln, ModeArg, SpaceArg};
 use anyhow::Context;
-use clap::{Args, ValueEnum};
+use clap::Args;
 use specmap::colorimetry::{Observer, RgbSpace};
 use specmap::data;
 use specmap::fit::{self, FitInput, Mode};
@@ -45,16 +45,6 @@ pub struct FitArgs {
     json: bool,
 }
 
-#[derive(Debug, Clone, Copy, ValueEnum)]
-enum ModeArg {
-    /// the paper's three weights (exact for white only)
-    Paper,
-    /// a full 3x3 matrix: the round trip is exact for every colour (the SPD may go negative)
-    Exact,
-    /// exact where the SPD stays non-negative, else the non-negative SPD of least CIEDE2000 error
-    Nonneg,
-}
-
 pub fn run(a: FitArgs) -> anyhow::Result<()> {
     if a.basis.len() != 3 {
         anyhow::bail!(
@@ -72,15 +62,7 @@ pub fn run(a: FitArgs) -> anyhow::Result<()> {
         .iter()
         .map(|b| data::spectrum(b))
         .collect::<Result<_, _>>()?;
-    let modes: Vec<Mode> = a
-        .mode
-        .iter()
-        .map(|m| match m {
-            ModeArg::Paper => Mode::Paper,
-            ModeArg::Exact => Mode::Exact,
-            ModeArg::Nonneg => Mode::Nonneg,
-        })
-        .collect();
+    let modes: Vec<Mode> = a.mode.iter().map(|&m| Mode::from(m)).collect();
     let mut fits = Vec::new();
     for name in &a.light {
         let light = data::spectrum(name)?;

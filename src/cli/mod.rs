@@ -1,8 +1,10 @@
 //! Flag definitions and the dispatch to each command.
 
 mod color;
+mod convert;
 mod data;
 mod fit;
+mod roundtrip;
 mod thinfilm;
 
 /// `writeln!` into a String (infallible).
@@ -24,6 +26,7 @@ Examples:
   specmap data show D65 --range 380:780:5 --plot d65.png
   specmap color colorchecker:red --under D65 --json
   specmap color my_lamp.csv
+  specmap convert envmaps/sunrise.exr -o sunrise.spectral.exr --light auto
   specmap fit --light FL2 --mode exact -o fit.json --plot basis.png
   specmap thinfilm --layers 2.7:270 --substrate 1.45 --json
 
@@ -45,8 +48,12 @@ enum Command {
     Data(data::DataCommand),
     /// Colour of a spectrum: XYZ (paper Eq. 10/11), xy, CCT, linear RGB, 8-bit sRGB, CIELAB.
     Color(color::ColorArgs),
+    /// Convert an RGB environment map (EXR/HDR, lat-long or cube) to a spectral OpenEXR.
+    Convert(Box<convert::ConvertArgs>),
     /// Fit the paper's basis weights w_R, w_G, w_B for a main light; exact and non-negative modes.
     Fit(fit::FitArgs),
+    /// Integrate a spectral EXR back to RGB and compare with its RGB preview (CIEDE2000).
+    Roundtrip(roundtrip::RoundtripArgs),
     /// Multilayer thin film: R and T spectra (paper Eq. 2-9, N layers) and the reflected colour.
     Thinfilm(thinfilm::ThinfilmArgs),
 }
@@ -55,7 +62,9 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Data(c) => data::run(c),
         Command::Color(a) => color::run(a),
+        Command::Convert(a) => convert::run(*a),
         Command::Fit(a) => fit::run(a),
+        Command::Roundtrip(a) => roundtrip::run(a),
         Command::Thinfilm(a) => thinfilm::run(a),
     }
 }
@@ -94,6 +103,26 @@ pub fn write_srgb8(out: &mut String, code: [u8; 3]) {
         out,
         "  sRGB 8-bit   {r:>10} {g:>10} {b:>10}   #{r:02X}{g:02X}{b:02X}"
     );
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum ModeArg {
+    /// the paper's three weights (exact for white only)
+    Paper,
+    /// a full 3x3 matrix: the round trip is exact for every colour (the SPD may go negative)
+    Exact,
+    /// exact where the SPD stays non-negative, else the non-negative SPD of least CIEDE2000 error
+    Nonneg,
+}
+
+impl From<ModeArg> for specmap::fit::Mode {
+    fn from(m: ModeArg) -> Self {
+        match m {
+            ModeArg::Paper => specmap::fit::Mode::Paper,
+            ModeArg::Exact => specmap::fit::Mode::Exact,
+            ModeArg::Nonneg => specmap::fit::Mode::Nonneg,
+        }
+    }
 }
 
 /// CIE standard observers.

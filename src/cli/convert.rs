@@ -1,0 +1,309 @@
+//! `specmap convert`: RGB environment map -> spectral OpenEXR.
+
+use super::{outln, ModeArg, SpaceArg};
+use anyhow::Context;
+use clap::{Args, ValueEnum};
+use specmap::envmap::convert::{self, ConvertOptions, LightSpec, OutputFormat, SunSpd};
+use specmap::envmap::exrio::{Compression, Precision};
+use specmap::envmap::layout::Layout;
+use specmap::envmap::sun::{SunSearch, SunSettings};
+use specmap::fit::Fit;
+use std::io::IsTerminal;
+use std::path::PathBuf;
+
+#[derive(Debug, Args)]
+pub struct ConvertArgs {
+    /// Input map: OpenEXR or Radiance .hdr; with --in-layout faces, a pattern with {face}
+    /// (px, nx, py, ny, pz, nz).
+    input: String,
+    /// Output OpenEXR (written to a temporary file, then renamed).
+    #[arg(short, long, value_name = "OUT.exr")]
+    output: PathBuf,
+    /// Main light: a table name or CSV, or `auto` to choose it from the scene.
+    #[arg(long, default_value = "D65")]
+    light: String,
+    /// A fit from `specmap fit -o` (its light, basis, mode and space win).
+    #[arg(long, value_name = "FIT.json")]
+    fit: Option<PathBuf>,
+    /// How RGB becomes a spectrum.
+    #[arg(long, value_enum, default_value_t = ModeArg::Exact)]
+    mode: ModeArg,
+    /// RGB space of the input.
+    #[arg(long, value_enum, default_value_t = SpaceArg::Srgb)]
+    space: SpaceArg,
+    /// Find the sun and give its pixels their own SPD.
+    #[arg(long, value_enum, default_value_t = SunArg::Auto)]
+    sun: SunArg,
+    /// The sun's SPD: D65 (the paper), `match` (daylight or Planckian at the sun's CCT), or a light.
+    #[arg(long, default_value = "D65")]
+    sun_spd: String,
+    /// Input layout (default: the `envmap` attribute, else the aspect ratio).
+    #[arg(long, value_enum, default_value_t = InLayout::Auto)]
+    in_layout: InLayout,
+    /// Output layout.
+    #[arg(long, value_enum, default_value_t = OutLayout::Same)]
+    out_layout: OutLayout,
+    /// Output size: lat-long height or cube face size (default: matched to the input).
+    #[arg(long)]
+    size: Option<usize>,
+    /// A named layer of the input (`<layer>.R` ...).
+    #[arg(long)]
+    layer: Option<String>,
+    /// Output wavelengths START:END:STEP in nm.
+    #[arg(long, default_value = "380:780:5")]
+    range: specmap::spectrum::WavelengthGrid,
+    /// `spectral`: one channel per wavelength (Fichet 2021) + RGB preview + sun mask; `basis`:
+    /// c_R, c_G, c_B, sun with the basis spectra in the header.
+    #[arg(long, value_enum, default_value_t = FormatArg::Spectral)]
+    format: FormatArg,
+    /// Sample precision (half: values over 65504 are scaled by 2^EV, never clipped).
+    #[arg(long, value_enum, default_value_t = PrecisionArg::Half)]
+    precision: PrecisionArg,
+    /// OpenEXR compression.
+    #[arg(long, value_enum, default_value_t = CompressionArg::Zip)]
+    compression: CompressionArg,
+    /// NaN and infinite pixels are an error (default: set to 0 and counted).
+    #[arg(long)]
+    strict: bool,
+    /// No progress bar.
+    #[arg(long)]
+    quiet: bool,
+    /// Machine-readable summary.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum SunArg {
+    Auto,
+    Off,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum InLayout {
+    Auto,
+    Latlong,
+    Cube,
+    Hcross,
+    Vcross,
+    Hstrip,
+    Vstrip,
+    /// six files named by a {face} pattern
+    Faces,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum OutLayout {
+    Same,
+    Latlong,
+    Cube,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum FormatArg {
+    Spectral,
+    Basis,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum PrecisionArg {
+    Half,
+    Float,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum CompressionArg {
+    None,
+    Rle,
+    Zip,
+    Zips,
+    Piz,
+    Pxr24,
+    B44,
+    B44a,
+}
+
+pub fn run(a: ConvertArgs) -> anyhow::Result<()> {
+    if let Some(dir) = a.output.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("creating the output folder {}", dir.display()))?;
+    }
+    let fit = match &a.fit {
+        Some(p) => Some(Fit::load(p)?),
+        None => None,
+    };
+    let in_layout = match a.in_layout {
+        InLayout::Auto | InLayout::Faces => None,
+        InLayout::Latlong => Some(Layout::LatLong),
+        InLayout::Cube => Some(Layout::Cube),
+        InLayout::Hcross => Some(Layout::HCross),
+        InLayout::Vcross => Some(Layout::VCross),
+        InLayout::Hstrip => Some(Layout::HStrip),
+        InLayout::Vstrip => Some(Layout::VStrip),
+    };
+    let opts = ConvertOptions {
+        light: if a.light.eq_ignore_ascii_case("auto") {
+            LightSpec::Auto
+        } else {
+            LightSpec::Named(a.light.clone())
+        },
+        space: fit
+            .as_ref()
+            .map(|f| f.rgb_space())
+            .unwrap_or(a.space.into()),
+        fit,
+        mode: a.mode.into(),
+        sun: match a.sun {
+            SunArg::Auto => Some(SunSettings::default()),
+            SunArg::Off => None,
+        },
+        sun_spd: match a.sun_spd.to_ascii_lowercase().as_str() {
+            "d65" => SunSpd::D65,
+            "match" => SunSpd::Match,
+            _ => SunSpd::Light(a.sun_spd.clone()),
+        },
+        in_layout,
+        faces: matches!(a.in_layout, InLayout::Faces),
+        layer: a.layer.clone(),
+        out_layout: match a.out_layout {
+            OutLayout::Same => None,
+            OutLayout::Latlong => Some(Layout::LatLong),
+            OutLayout::Cube => Some(Layout::Cube),
+        },
+        size: a.size,
+        grid: a.range,
+        format: match a.format {
+            FormatArg::Spectral => OutputFormat::Spectral,
+            FormatArg::Basis => OutputFormat::Basis,
+        },
+        precision: match a.precision {
+            PrecisionArg::Half => Precision::Half,
+            PrecisionArg::Float => Precision::Float,
+        },
+        compression: match a.compression {
+            CompressionArg::None => Compression::None,
+            CompressionArg::Rle => Compression::Rle,
+            CompressionArg::Zip => Compression::Zip,
+            CompressionArg::Zips => Compression::Zips,
+            CompressionArg::Piz => Compression::Piz,
+            CompressionArg::Pxr24 => Compression::Pxr24,
+            CompressionArg::B44 => Compression::B44,
+            CompressionArg::B44a => Compression::B44a,
+        },
+        strict: a.strict,
+        ..ConvertOptions::default()
+    };
+    let bar = (!a.quiet && std::io::stderr().is_terminal()).then(|| {
+        let b = indicatif::ProgressBar::new(0);
+        b.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{msg} [{bar:40}] {pos}/{len} rows, {elapsed} (eta {eta})",
+            )
+            .expect("a valid template")
+            .progress_chars("=> "),
+        );
+        b.set_message("converting");
+        b
+    });
+    let progress = |done: usize, total: usize| {
+        if let Some(b) = &bar {
+            b.set_length(total as u64);
+            b.set_position(done as u64);
+        }
+    };
+    let report = convert::convert(&a.input, &a.output, &opts, &progress)
+        .with_context(|| format!("converting {}", a.input))?;
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    if a.json {
+        super::emit(&(serde_json::to_string_pretty(&report)? + "\n"));
+        return Ok(());
+    }
+    let r = &report;
+    let mut out = String::new();
+    outln!(out, "{} -> {}", r.input, r.output);
+    outln!(
+        out,
+        "  input        {} {}x{} ({})",
+        r.input_layout.name(),
+        r.input_size[0],
+        r.input_size[1],
+        r.input_description
+    );
+    if r.sanitized.non_finite + r.sanitized.negative > 0 {
+        outln!(
+            out,
+            "  sanitized    {} NaN/infinite and {} negative values set to 0",
+            r.sanitized.non_finite,
+            r.sanitized.negative
+        );
+    }
+    match &r.light_choice {
+        Some(c) => outln!(out, "  light        {} (auto: {})", r.light, c.reason),
+        None => outln!(out, "  light        {}", r.light),
+    }
+    outln!(
+        out,
+        "  fit          {:?} mode, weights {:.4} {:.4} {:.4}, condition {:.3e}{}",
+        r.mode,
+        r.weights[0],
+        r.weights[1],
+        r.weights[2],
+        r.condition_number,
+        if r.regularized { " (reduced)" } else { "" }
+    );
+    match &r.sun {
+        SunSearch::Found(s) => outln!(
+            out,
+            "  sun          {} pixels, elevation {:.1}°, azimuth {:.1}°, {:.2e} sr, {:.1}% of the \
+             energy, {}{} -> {}",
+            s.pixel_count,
+            s.elevation_deg,
+            s.azimuth_deg,
+            s.solid_angle_sr,
+            100.0 * s.energy_share,
+            s.cct
+                .kelvin
+                .map(|k| format!("CCT {k:.0} K"))
+                .unwrap_or_else(|| "no CCT".into()),
+            if s.clipped { ", clipped" } else { "" },
+            r.sun_spd.as_deref().unwrap_or("kept")
+        ),
+        SunSearch::NotFound { reason } => outln!(out, "  sun          none: {reason}"),
+    }
+    outln!(
+        out,
+        "  output       {} {}x{}, {} channels ({} wavelengths {}..{} nm), {}, {}{}, {:.1} MB",
+        r.output_layout.name(),
+        r.output_size[0],
+        r.output_size[1],
+        r.channels,
+        r.wavelengths_nm.len(),
+        r.wavelengths_nm.first().unwrap_or(&0.0),
+        r.wavelengths_nm.last().unwrap_or(&0.0),
+        r.precision,
+        r.compression,
+        r.ev.map(|e| format!(", values / 2^{e} (EV)"))
+            .unwrap_or_default(),
+        r.bytes as f64 / 1e6
+    );
+    outln!(
+        out,
+        "  round trip   CIEDE2000 energy-weighted mean {:.4}, max {:.4}; without the sun: mean \
+         {:.4}, max {:.4}",
+        r.roundtrip.weighted_mean_de2000,
+        r.roundtrip.max_de2000,
+        r.roundtrip_without_sun.weighted_mean_de2000,
+        r.roundtrip_without_sun.max_de2000
+    );
+    outln!(
+        out,
+        "  time         read {:.2} s, convert + write {:.2} s ({:.1} input Mpixel/s)",
+        r.seconds_read,
+        r.seconds_convert,
+        r.megapixels_per_second
+    );
+    super::emit(&out);
+    Ok(())
+}

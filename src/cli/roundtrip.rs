@@ -1,0 +1,74 @@
+//! `specmap roundtrip`: integrate a spectral EXR back to RGB and compare with its RGB preview.
+
+use super::{outln, ObserverArg, RuleArg};
+use clap::Args;
+use specmap::envmap::roundtrip::{round_trip_file, write_heatmap};
+use std::path::PathBuf;
+
+#[derive(Debug, Args)]
+pub struct RoundtripArgs {
+    /// A spectral OpenEXR (from `specmap convert`, or any Fichet-layout file with R, G, B).
+    file: PathBuf,
+    /// Write a per-pixel CIEDE2000 heatmap (PNG; white at --heatmap-max and above).
+    #[arg(long, value_name = "OUT.png")]
+    heatmap: Option<PathBuf>,
+    /// CIEDE2000 shown as white in the heatmap.
+    #[arg(long, default_value_t = 5.0)]
+    heatmap_max: f32,
+    /// Standard observer.
+    #[arg(long, value_enum, default_value_t = ObserverArg::Cie1931)]
+    observer: ObserverArg,
+    /// Integration rule.
+    #[arg(long, value_enum, default_value_t = RuleArg::Riemann)]
+    rule: RuleArg,
+    /// Machine-readable output.
+    #[arg(long)]
+    json: bool,
+}
+
+pub fn run(a: RoundtripArgs) -> anyhow::Result<()> {
+    let mut de = Vec::new();
+    let r = round_trip_file(
+        &a.file,
+        a.observer.into(),
+        a.rule.into(),
+        a.heatmap.as_ref().map(|_| &mut de),
+    )?;
+    if let Some(path) = &a.heatmap {
+        write_heatmap(path, r.width, r.height, &de, a.heatmap_max)?;
+        eprintln!("wrote {}", path.display());
+    }
+    if a.json {
+        super::emit(&(serde_json::to_string_pretty(&r)? + "\n"));
+        return Ok(());
+    }
+    let mut out = String::new();
+    outln!(
+        out,
+        "{}: {}x{}, {} wavelengths {}..{} nm, {}{}",
+        r.file,
+        r.width,
+        r.height,
+        r.wavelengths,
+        r.range_nm[0],
+        r.range_nm[1],
+        r.space,
+        r.white_balance
+            .map(|t| format!(", white-balanced by the main light's RGB {t:.4?}"))
+            .unwrap_or_default()
+    );
+    for (name, s) in [("all pixels", &r.all), ("without the sun", &r.without_sun)] {
+        outln!(
+            out,
+            "  {name:<16} {} pixels: CIEDE2000 energy-weighted mean {:.4}, max {:.4} at ({}, {})",
+            s.pixels,
+            s.weighted_mean_de2000,
+            s.max_de2000,
+            s.max_at[0],
+            s.max_at[1]
+        );
+    }
+    outln!(out, "  sun pixels       {}", r.sun_pixels);
+    super::emit(&out);
+    Ok(())
+}

@@ -1,0 +1,296 @@
+//! `roundtrip`: re-read a spectral OpenEXR, integrate its spectra back to RGB and compare them
+//! with the file's own R, G, B preview (the original pixels), pixel by pixel, streaming.
+
+use crate::colorimetry::{delta_e_2000, Lab, Observer, RgbSpace};
+use crate::envmap::exrio::read_spectral_rows;
+use crate::envmap::layout::{detect, EnvMap, Layout};
+use crate::envmap::RgbImage;
+use crate::error::{Error, Result};
+use crate::spectrum::{Interpolation, Rule, Tabulated, WavelengthGrid};
+use std::path::Path;
+
+/// Statistics of one set of pixels.
+#[derive(Debug, Clone, Copy, Default, serde::Serialize)]
+pub struct Stats {
+    pub pixels: usize,
+    /// Energy-weighted (luminance x solid angle) mean CIEDE2000.
+    pub weighted_mean_de2000: f64,
+    pub max_de2000: f64,
+    /// Pixel (x, y) of the maximum.
+    pub max_at: [usize; 2],
+}
+
+/// The result of a file round trip.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct FileRoundTrip {
+    pub file: String,
+    pub width: usize,
+    pub height: usize,
+    pub layout: Option<Layout>,
+    pub wavelengths: usize,
+    pub range_nm: [f64; 2],
+    pub space: String,
+    /// The main light's RGB the spectra were divided by (the paper's white balance), from the
+    /// `specmap.lightRGB` attribute; None for files without it.
+    pub white_balance: Option<[f64; 3]>,
+    pub all: Stats,
+    /// Pixels not marked in the `sun` channel (all pixels when the file has none).
+    pub without_sun: Stats,
+    pub sun_pixels: usize,
+}
+
+#[derive(Default)]
+struct Acc {
+    w: f64,
+    sum: f64,
+    stats: Stats,
+}
+
+impl Acc {
+    fn add(&mut self, de: f64, weight: f64, x: usize, y: usize) {
+        self.sum += de * weight;
+        self.w += weight;
+        self.stats.pixels += 1;
+        if de > self.stats.max_de2000 {
+            self.stats.max_de2000 = de;
+            self.stats.max_at = [x, y];
+        }
+    }
+    fn finish(mut self) -> Stats {
+        self.stats.weighted_mean_de2000 = if self.w > 0.0 { self.sum / self.w } else { 0.0 };
+        self.stats
+    }
+}
+
+/// Reads the single float channel `name` of the first part, if the file has it.
+fn read_mask(path: &Path, name: &str) -> Option<Vec<f32>> {
+    use exr::prelude::*;
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_file(path)
+        .ok()?;
+    image
+        .layer_data
+        .channel_data
+        .list
+        .iter()
+        .find(|c| c.name == *name)
+        .map(|c| c.sample_data.values_as_f32().collect())
+}
+
+/// Integrates every pixel's spectrum back to RGB and compares it with the preview channels.
+/// `heatmap`, if given, receives the per-pixel CIEDE2000 (row-major).
+pub fn round_trip_file(
+    path: &Path,
+    observer: Observer,
+    rule: Rule,
+    mut heatmap: Option<&mut Vec<f32>>,
+) -> Result<FileRoundTrip> {
+    // First pass over the header: wavelengths, attributes (read_spectral_rows gives them at the
+    // end, so peek with a cheap metadata read).
+    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| Error::Parse {
+        file: path.to_path_buf(),
+        line: None,
+        message: format!("not a readable OpenEXR file: {e}"),
+    })?;
+    let header = &meta.headers[0];
+    let mut wavelengths: Vec<f64> = header
+        .channels
+        .list
+        .iter()
+        .filter_map(|c| crate::envmap::exrio::parse_spectral_channel_name(&c.name.to_string()))
+        .collect();
+    wavelengths.sort_by(f64::total_cmp);
+    if wavelengths.len() < 2 {
+        return Err(Error::invalid(format!(
+            "{}: a round trip needs at least two S0.<wavelength>nm channels",
+            path.display()
+        )));
+    }
+    let (width, height) = (header.layer_size.0, header.layer_size.1);
+    // CMFs at the file's wavelengths, with the rule's weights (non-uniform grids: trapezoid).
+    let cmf_table = crate::data::Table::builtin(observer.table_name())?;
+    let at = |col: &str| -> Result<Vec<f64>> {
+        let t: Tabulated = cmf_table.column(col)?;
+        Ok(wavelengths
+            .iter()
+            .map(|&w| {
+                let g = WavelengthGrid::new(w, w, 1.0).expect("one wavelength");
+                t.resample(&g, Interpolation::SMOOTH).values()[0]
+            })
+            .collect())
+    };
+    let (xb, yb, zb) = (at("x")?, at("y")?, at("z")?);
+    let weights: Vec<f64> = match Tabulated::new(wavelengths.clone(), vec![0.0; wavelengths.len()])?
+        .uniform_step_nm()
+    {
+        Some(step) => rule.weights(wavelengths.len(), step),
+        None => {
+            // Trapezoid weights on a non-uniform grid.
+            let n = wavelengths.len();
+            (0..n)
+                .map(|i| {
+                    let l = if i > 0 {
+                        wavelengths[i] - wavelengths[i - 1]
+                    } else {
+                        0.0
+                    };
+                    let r = if i + 1 < n {
+                        wavelengths[i + 1] - wavelengths[i]
+                    } else {
+                        0.0
+                    };
+                    (l + r) / 2.0
+                })
+                .collect()
+        }
+    };
+    let y_norm: f64 = yb.iter().zip(&weights).map(|(y, w)| y * w).sum();
+    let mut info_space = RgbSpace::SRGB;
+    let mut white_balance = None;
+    for (name, value) in header.own_attributes.other.iter() {
+        let name = name.to_string();
+        if name == "specmap.space" {
+            if let exr::meta::attribute::AttributeValue::Text(t) = value {
+                let t = t.to_string();
+                if let Some(s) = RgbSpace::ALL.into_iter().find(|s| s.name == t) {
+                    info_space = s;
+                }
+            }
+        }
+        if name == "specmap.lightRGB" {
+            // OpenEXR's `floatvector`: little-endian f32s.
+            if let exr::meta::attribute::AttributeValue::Custom { kind, bytes } = value {
+                if kind == "floatvector" && bytes.len() == 12 {
+                    let f = |i: usize| {
+                        f32::from_le_bytes([bytes[i], bytes[i + 1], bytes[i + 2], bytes[i + 3]])
+                            as f64
+                    };
+                    white_balance = Some([f(0), f(4), f(8)]);
+                }
+            }
+        }
+    }
+    let space = info_space;
+    let m = space.from_xyz_matrix();
+    let white = space.xyz_from_rgb([1.0, 1.0, 1.0]);
+    let envmap = header.own_attributes.other.iter().find_map(|(k, v)| {
+        (k == "envmap").then_some(v).and_then(|v| match v {
+            exr::meta::attribute::AttributeValue::EnvironmentMap(e) => Some(match e {
+                exr::meta::attribute::EnvironmentMap::LatitudeLongitude => Layout::LatLong,
+                exr::meta::attribute::EnvironmentMap::Cube => Layout::Cube,
+            }),
+            _ => None,
+        })
+    });
+    let layout = detect(width, height, envmap).ok();
+    let solid = layout.and_then(|l| EnvMap::new(l, RgbImage::new(width, height)).ok());
+    let sun = read_mask(path, "sun");
+    let y_row = {
+        let t = space.to_xyz_matrix();
+        [t[(1, 0)], t[(1, 1)], t[(1, 2)]]
+    };
+    let bands = wavelengths.len();
+    let (mut all, mut no_sun) = (Acc::default(), Acc::default());
+    let mut sun_pixels = 0;
+    let mut missing_rgb = false;
+    if let Some(h) = heatmap.as_deref_mut() {
+        h.clear();
+        h.resize(width * height, 0.0);
+    }
+    let info = read_spectral_rows(path, |y, row| {
+        let per = row.len() / width.max(1);
+        if per < bands + 3 {
+            missing_rgb = true;
+            return;
+        }
+        for x in 0..width {
+            let p = &row[x * per..(x + 1) * per];
+            let (mut xx, mut yy, mut zz) = (0.0, 0.0, 0.0);
+            for i in 0..bands {
+                let v = p[i] as f64 * weights[i];
+                xx += v * xb[i];
+                yy += v * yb[i];
+                zz += v * zb[i];
+            }
+            let xyz = nalgebra::Vector3::new(xx, yy, zz) / y_norm;
+            let mut back: [f64; 3] = (m * xyz).into();
+            if let Some(t) = white_balance {
+                for k in 0..3 {
+                    back[k] /= t[k];
+                }
+            }
+            let input = [p[bands] as f64, p[bands + 1] as f64, p[bands + 2] as f64];
+            let lum = y_row[0] * input[0] + y_row[1] * input[1] + y_row[2] * input[2];
+            if lum.is_nan() || lum <= 0.0 {
+                continue;
+            }
+            let de = delta_e_2000(
+                Lab::from_xyz(space.xyz_from_rgb(input.map(|v| v / lum)), white),
+                Lab::from_xyz(space.xyz_from_rgb(back.map(|v| v / lum)), white),
+            );
+            let omega = solid.as_ref().map(|s| s.solid_angle(x, y)).unwrap_or(1.0);
+            let i = y * width + x;
+            let is_sun = sun.as_ref().is_some_and(|s| s[i] > 0.5);
+            all.add(de, lum * omega, x, y);
+            if is_sun {
+                sun_pixels += 1;
+            } else {
+                no_sun.add(de, lum * omega, x, y);
+            }
+            if let Some(h) = heatmap.as_deref_mut() {
+                h[i] = de as f32;
+            }
+        }
+    })?;
+    if missing_rgb || !info.has_rgb {
+        return Err(Error::invalid(format!(
+            "{}: the file has no R, G, B channels to compare the spectra with",
+            path.display()
+        )));
+    }
+    Ok(FileRoundTrip {
+        file: path.display().to_string(),
+        width,
+        height,
+        layout,
+        wavelengths: bands,
+        range_nm: [wavelengths[0], wavelengths[bands - 1]],
+        space: space.name.to_string(),
+        white_balance,
+        all: all.finish(),
+        without_sun: no_sun.finish(),
+        sun_pixels,
+    })
+}
+
+/// Writes a CIEDE2000 heatmap as an sRGB PNG: black at 0, through red and yellow, white at
+/// `max_de` and above.
+pub fn write_heatmap(
+    path: &Path,
+    width: usize,
+    height: usize,
+    de: &[f32],
+    max_de: f32,
+) -> Result<()> {
+    let mut img = image::RgbImage::new(width as u32, height as u32);
+    for (i, px) in img.pixels_mut().enumerate() {
+        let t = (de[i] / max_de).clamp(0.0, 1.0);
+        // A simple "hot" colour map.
+        let r = (3.0 * t).min(1.0);
+        let g = (3.0 * t - 1.0).clamp(0.0, 1.0);
+        let b = (3.0 * t - 2.0).clamp(0.0, 1.0);
+        *px = image::Rgb([r, g, b].map(|v| (v * 255.0).round() as u8));
+    }
+    let tmp = crate::io::temp_path_for(path)?;
+    img.save_with_format(&tmp, image::ImageFormat::Png)
+        .map_err(|e| {
+            let _ = std::fs::remove_file(&tmp);
+            Error::invalid(format!("{}: cannot write the heatmap: {e}", path.display()))
+        })?;
+    crate::io::rename_into_place(&tmp, path)
+}

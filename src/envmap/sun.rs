@@ -1,0 +1,259 @@
+//! Sun detection: a compact, very bright region that carries a large share of a map's energy.
+//!
+//! The sun of a real HDR photograph covers a few pixels (often clipped at the half-float maximum)
+//! yet lights most of the scene; an overcast sky's brightest patch is neither as compact nor as
+//! dominant. The test, on radiance-weighted luminance `Y * solid angle`:
+//! 1. the region: pixels within [`SunSettings::max_radius_deg`] of the brightest pixel whose
+//!    luminance is at least [`SunSettings::peak_fraction`] of its;
+//! 2. it is a sun if its solid angle is at most [`SunSettings::max_solid_angle_sr`] and it carries
+//!    at least [`SunSettings::min_energy_share`] of the map's energy.
+
+use crate::colorimetry::{cct, Cct, RgbSpace};
+use crate::envmap::layout::EnvMap;
+
+/// Thresholds of the sun test.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct SunSettings {
+    /// Largest solid angle of a sun region (steradians). The sun's disc is 6.8e-5 sr; blooming and
+    /// resampling spread it, so the default allows about 70 times that.
+    pub max_solid_angle_sr: f64,
+    /// Smallest share of the map's energy (luminance x solid angle) the region must carry.
+    pub min_energy_share: f64,
+    /// Pixels at least this fraction of the peak luminance belong to the region.
+    pub peak_fraction: f64,
+    /// Pixels farther than this from the peak do not belong to the region (degrees).
+    pub max_radius_deg: f64,
+}
+
+impl Default for SunSettings {
+    fn default() -> Self {
+        SunSettings {
+            max_solid_angle_sr: 0.005,
+            min_energy_share: 0.2,
+            peak_fraction: 0.1,
+            max_radius_deg: 5.0,
+        }
+    }
+}
+
+/// A sun found in a map.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Sun {
+    /// Indices (y * width + x) of the sun's pixels.
+    #[serde(skip)]
+    pub pixels: Vec<usize>,
+    pub pixel_count: usize,
+    /// Energy-weighted mean direction (unit vector, map space: Y up).
+    pub direction: [f64; 3],
+    /// Angle above the horizon (degrees).
+    pub elevation_deg: f64,
+    /// Angle from +Z towards +X (degrees).
+    pub azimuth_deg: f64,
+    pub solid_angle_sr: f64,
+    /// The region's share of the map's energy.
+    pub energy_share: f64,
+    /// Energy-weighted mean linear RGB of the region.
+    pub mean_rgb: [f64; 3],
+    pub peak_luminance: f64,
+    /// Correlated colour temperature of the region's mean colour.
+    pub cct: Cct,
+    /// True when the peak sits at the half-float maximum: the sun was clipped by the camera or the
+    /// file, so its energy and colour are underestimates.
+    pub clipped: bool,
+}
+
+/// What the search found.
+#[derive(Debug, Clone, serde::Serialize)]
+#[serde(tag = "found", rename_all = "lowercase")]
+pub enum SunSearch {
+    #[serde(rename = "true")]
+    Found(Sun),
+    #[serde(rename = "false")]
+    NotFound {
+        /// Why the brightest region is not a sun, in words.
+        reason: String,
+    },
+}
+
+impl SunSearch {
+    pub fn sun(&self) -> Option<&Sun> {
+        match self {
+            SunSearch::Found(s) => Some(s),
+            SunSearch::NotFound { .. } => None,
+        }
+    }
+}
+
+/// Finds the sun of `map` (linear RGB in `space`), if it has one.
+pub fn find_sun(map: &EnvMap, space: &RgbSpace, settings: &SunSettings) -> SunSearch {
+    let img = &map.image;
+    let m = space.to_xyz_matrix();
+    let luminance = |p: [f32; 3]| -> f64 {
+        (m[(1, 0)] * p[0] as f64 + m[(1, 1)] * p[1] as f64 + m[(1, 2)] * p[2] as f64).max(0.0)
+    };
+    let mut total = 0.0;
+    let mut peak = (0.0f64, usize::MAX);
+    for y in 0..img.height {
+        for x in 0..img.width {
+            let i = y * img.width + x;
+            let l = luminance(img.pixels[i]);
+            let omega = map.solid_angle(x, y);
+            if omega <= 0.0 || !l.is_finite() {
+                continue;
+            }
+            total += l * omega;
+            if l > peak.0 {
+                peak = (l, i);
+            }
+        }
+    }
+    if total.is_nan() || total <= 0.0 || peak.1 == usize::MAX {
+        return SunSearch::NotFound {
+            reason: "the map holds no light".into(),
+        };
+    }
+    let (peak_l, peak_i) = peak;
+    let peak_dir = match map.direction(peak_i % img.width, peak_i / img.width) {
+        Some(d) => d,
+        None => {
+            return SunSearch::NotFound {
+                reason: "the brightest pixel has no direction".into(),
+            }
+        }
+    };
+    let cos_max = settings.max_radius_deg.to_radians().cos();
+    let threshold = settings.peak_fraction * peak_l;
+    let mut pixels = Vec::new();
+    let (mut energy, mut omega_sum) = (0.0, 0.0);
+    let mut dir_sum = [0.0f64; 3];
+    let mut rgb_sum = [0.0f64; 3];
+    for y in 0..img.height {
+        for x in 0..img.width {
+            let i = y * img.width + x;
+            let p = img.pixels[i];
+            let l = luminance(p);
+            if l < threshold {
+                continue;
+            }
+            let Some(d) = map.direction(x, y) else {
+                continue;
+            };
+            if d[0] * peak_dir[0] + d[1] * peak_dir[1] + d[2] * peak_dir[2] < cos_max {
+                continue;
+            }
+            let omega = map.solid_angle(x, y);
+            let e = l * omega;
+            pixels.push(i);
+            energy += e;
+            omega_sum += omega;
+            for k in 0..3 {
+                dir_sum[k] += e * d[k];
+                rgb_sum[k] += omega * p[k] as f64;
+            }
+        }
+    }
+    let share = energy / total;
+    if omega_sum > settings.max_solid_angle_sr || share < settings.min_energy_share {
+        return SunSearch::NotFound {
+            reason: format!(
+                "the brightest region ({} pixels, {:.2e} sr, peak luminance {:.3}) carries {:.1}% \
+                 of the energy; a sun covers at most {:.2e} sr and carries at least {:.0}%",
+                pixels.len(),
+                omega_sum,
+                peak_l,
+                100.0 * share,
+                settings.max_solid_angle_sr,
+                100.0 * settings.min_energy_share
+            ),
+        };
+    }
+    let norm = (dir_sum[0].powi(2) + dir_sum[1].powi(2) + dir_sum[2].powi(2)).sqrt();
+    let direction = dir_sum.map(|v| v / norm);
+    let mean_rgb = rgb_sum.map(|v| v / omega_sum);
+    let xyz = space.xyz_from_rgb(mean_rgb);
+    let cct = cct(xyz).unwrap_or(Cct {
+        kelvin: None,
+        duv: f64::NAN,
+    });
+    let max_channel = pixels
+        .iter()
+        .flat_map(|&i| img.pixels[i])
+        .fold(0.0f32, f32::max);
+    SunSearch::Found(Sun {
+        pixel_count: pixels.len(),
+        pixels,
+        direction,
+        elevation_deg: direction[1].clamp(-1.0, 1.0).asin().to_degrees(),
+        azimuth_deg: direction[0].atan2(direction[2]).to_degrees(),
+        solid_angle_sr: omega_sum,
+        energy_share: share,
+        mean_rgb,
+        peak_luminance: peak_l,
+        cct,
+        clipped: max_channel >= 65000.0,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::envmap::layout::Layout;
+    use crate::envmap::RgbImage;
+
+    /// A lat-long sky of constant radiance with an optional disc of radiance `sun` and angular
+    /// radius `radius_deg` towards `dir`.
+    fn sky(width: usize, sun: Option<(f32, f64, [f64; 3])>) -> EnvMap {
+        let mut map = EnvMap::new(Layout::LatLong, RgbImage::new(width, width / 2)).unwrap();
+        for y in 0..width / 2 {
+            for x in 0..width {
+                let d = map.direction(x, y).unwrap();
+                let mut v = [0.8f32, 0.9, 1.0];
+                if let Some((l, r, s)) = sun {
+                    if d[0] * s[0] + d[1] * s[1] + d[2] * s[2] >= r.to_radians().cos() {
+                        v = [l, l, l * 0.9];
+                    }
+                }
+                map.image.set(x, y, v);
+            }
+        }
+        map
+    }
+
+    #[test]
+    fn finds_a_compact_dominant_sun_and_its_direction() {
+        let s = 0.5f64.sqrt();
+        let dir = [s * 0.0, s, s]; // 45 degrees up, towards +Z
+        let map = sky(512, Some((50000.0, 1.5, dir)));
+        let found = find_sun(&map, &RgbSpace::SRGB, &SunSettings::default());
+        let sun = found.sun().expect("a sun");
+        assert!((sun.elevation_deg - 45.0).abs() < 0.5, "{sun:?}");
+        assert!(sun.azimuth_deg.abs() < 0.5, "{sun:?}");
+        // The disc's solid angle: 2 pi (1 - cos r).
+        let expected = 2.0 * std::f64::consts::PI * (1.0 - 1.5f64.to_radians().cos());
+        assert!(
+            (sun.solid_angle_sr / expected - 1.0).abs() < 0.15,
+            "{sun:?}"
+        );
+        assert!(sun.energy_share > 0.5);
+        assert!(!sun.clipped);
+        assert!(sun.cct.kelvin.is_some());
+    }
+
+    #[test]
+    fn a_bright_but_weak_spot_or_a_broad_glow_is_not_a_sun() {
+        let none = find_sun(&sky(256, None), &RgbSpace::SRGB, &SunSettings::default());
+        assert!(none.sun().is_none());
+        // Bright but carrying little energy.
+        let weak = sky(512, Some((30.0, 1.0, [0.0, 0.5f64.sqrt(), 0.5f64.sqrt()])));
+        let r = find_sun(&weak, &RgbSpace::SRGB, &SunSettings::default());
+        assert!(r.sun().is_none(), "{r:?}");
+        // Dominant but broad (a 20-degree glow).
+        let broad = sky(256, Some((200.0, 20.0, [0.0, 1.0, 0.0])));
+        let r = find_sun(&broad, &RgbSpace::SRGB, &SunSettings::default());
+        assert!(r.sun().is_none(), "{r:?}");
+        let black = EnvMap::new(Layout::LatLong, RgbImage::new(8, 4)).unwrap();
+        assert!(find_sun(&black, &RgbSpace::SRGB, &SunSettings::default())
+            .sun()
+            .is_none());
+    }
+}

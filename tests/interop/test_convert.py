@@ -1,0 +1,93 @@
+"""Converted maps read by independent readers: colour-science's Fichet (2021) reader and
+OpenEXR's own Python binding; their spectra integrated back by colour-science."""
+import pathlib
+import subprocess
+
+import numpy as np
+import OpenEXR
+import pytest
+
+import colour
+
+from conftest import BIN, ROOT
+
+SHAPE = colour.SpectralShape(380, 780, 5)
+
+
+def convert(tmp_path, name, *args):
+    out = tmp_path / f"{name}.spectral.exr"
+    p = subprocess.run([BIN, "convert", str(ROOT / "envmaps" / f"{name}.exr"), "-o", str(out),
+                        "--quiet", *args], capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    return out
+
+
+def read_openexr(path):
+    """Header, channels and RGB preview by OpenEXR's binding. Call it before colour-science's
+    Fichet reader: that loads OpenImageIO, whose bundled OpenEXR library then shadows the
+    binding's in this process and custom header attributes go missing."""
+    with OpenEXR.File(str(path), separate_channels=True) as f:
+        header = dict(f.header())
+        channels = dict(f.channels())
+        preview = np.stack([channels[c].pixels for c in "RGB"], -1).astype(np.float64)
+    return header, channels, preview
+
+
+def rgb_from_spectra(spectra):
+    """Linear sRGB of spectral radiance with specmap's scale: Y = sum(L ybar) / sum(ybar)."""
+    cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].copy().align(SHAPE).values
+    xyz = spectra @ cmfs / cmfs[:, 1].sum()
+    cs = colour.RGB_COLOURSPACES["sRGB"]
+    return xyz @ np.linalg.inv(colour.normalised_primary_matrix(cs.primaries, cs.whitepoint)).T
+
+
+def test_forest_reads_back_with_colour_science_and_openexr(specmap, tmp_path):
+    out = convert(tmp_path, "forest", "--precision", "float")
+    header, channels, preview = read_openexr(out)
+    wavelengths, image = colour.io.read_spectral_image_Fichet2021(str(out))["S0"]
+    np.testing.assert_array_equal(wavelengths, SHAPE.wavelengths)
+    assert image.shape == (512, 1024, 81)
+    assert header["spectralLayoutVersion"] == "1.0"
+    assert header["emissiveUnits"] == "W.m^-2.sr^-1"
+    assert "S0.550,000000nm" in channels
+    assert str(header["envmap"]).endswith("LATLONG")
+    # Exact mode under D65: every pixel's spectrum integrates back to its RGB preview
+    # (white-balanced by the main light's RGB, stored in the header).
+    back = rgb_from_spectra(image.reshape(-1, 81).astype(np.float64))
+    back /= np.asarray(header["specmap.lightRGB"], dtype=np.float64)
+    want = preview.reshape(-1, 3)
+    lit = want.sum(1) > 1e-3
+    rel = np.abs(back[lit] - want[lit]).max(1) / want[lit].max(1)
+    assert np.percentile(rel, 99.9) < 1e-4 and rel.max() < 1e-3, rel.max()
+
+
+def test_sunrise_sun_pixels_carry_d65(specmap, tmp_path):
+    out = convert(tmp_path, "sunrise", "--precision", "float")
+    _, channels, _ = read_openexr(out)
+    mask = channels["sun"].pixels > 0.5
+    _, image = colour.io.read_spectral_image_Fichet2021(str(out))["S0"]
+    assert 1 <= mask.sum() <= 50
+    d65 = colour.SDS_ILLUMINANTS["D65"].copy().align(SHAPE).values
+    for spectrum in image[mask]:
+        ratio = spectrum / d65
+        np.testing.assert_allclose(ratio, ratio.mean(), rtol=1e-5)
+
+
+def test_roundtrip_command_agrees_with_colour_science(specmap, tmp_path):
+    """`specmap roundtrip` on a half-precision file: its statistics, recomputed in Python."""
+    out = convert(tmp_path, "forest")
+    r = specmap("roundtrip", str(out))
+    header, channels, preview = read_openexr(out)
+    _, image = colour.io.read_spectral_image_Fichet2021(str(out))["S0"]
+    back = rgb_from_spectra(image.reshape(-1, 81).astype(np.float64))
+    back /= np.asarray(header["specmap.lightRGB"], dtype=np.float64)
+    want = preview.reshape(-1, 3)
+    cs = colour.RGB_COLOURSPACES["sRGB"]
+    m = colour.normalised_primary_matrix(cs.primaries, cs.whitepoint)
+    y = want @ m[1]
+    lit = y > 0
+    white = colour.XYZ_to_xy(m @ np.ones(3))
+    lab = lambda rgb: colour.XYZ_to_Lab((rgb / y[lit, None]) @ m.T, white)
+    de = colour.delta_E(lab(want[lit]), lab(back[lit]), method="CIE 2000")
+    assert r["all"]["pixels"] == lit.sum()
+    assert r["all"]["max_de2000"] == pytest.approx(de.max(), rel=1e-3, abs=1e-4)
