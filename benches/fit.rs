@@ -4,28 +4,19 @@
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
 use specmap::colorimetry::{Observer, RgbSpace};
-use specmap::data;
-use specmap::fit::{fit, FitInput, LinearSystem, Mode, Upsampler};
-use specmap::spectrum::{Interpolation, Rule, WavelengthGrid};
+use specmap::fit::{fit, FitInput, LinearSystem, Mode, Upsampler, PAPER_BASIS};
+use specmap::spectrum::{Rule, WavelengthGrid};
 
 fn input(light: &str) -> FitInput {
-    let grid = WavelengthGrid::visible_1nm();
-    let l = data::spectrum(light).unwrap();
-    let names = ["red", "green", "blue"].map(|p| format!("colorchecker:{p}"));
-    FitInput {
-        light_label: l.label,
-        light: l.data.resample(&grid, Interpolation::LIGHT),
-        basis: names.clone().map(|n| {
-            data::spectrum(&n)
-                .unwrap()
-                .data
-                .resample(&grid, Interpolation::SMOOTH)
-        }),
-        basis_labels: names,
-        observer: Observer::Cie1931,
-        rule: Rule::Riemann,
-        space: RgbSpace::SRGB,
-    }
+    FitInput::from_names(
+        light,
+        PAPER_BASIS,
+        &WavelengthGrid::visible_1nm(),
+        Observer::Cie1931,
+        Rule::Riemann,
+        RgbSpace::SRGB,
+    )
+    .unwrap()
 }
 
 fn benches(c: &mut Criterion) {

@@ -104,7 +104,44 @@ pub struct Fit {
 
 pub const FIT_VERSION: u32 = 1;
 
+/// The paper's basis: the ColorChecker's red, green and blue patches.
+pub const PAPER_BASIS: [&str; 3] = [
+    "colorchecker:red",
+    "colorchecker:green",
+    "colorchecker:blue",
+];
+
 impl FitInput {
+    /// Resolves a light and three basis reflectances by name (a table, `TABLE:COLUMN` or a CSV
+    /// path) and puts them on `grid`: the light interpolated linearly, the reflectances by
+    /// CIE 167 (see [`crate::spectrum`]).
+    pub fn from_names(
+        light: &str,
+        basis: [&str; 3],
+        grid: &WavelengthGrid,
+        observer: Observer,
+        rule: Rule,
+        space: RgbSpace,
+    ) -> Result<FitInput> {
+        let light = crate::data::spectrum(light)?;
+        let [b0, b1, b2] = basis.map(crate::data::spectrum);
+        let basis = [b0?, b1?, b2?];
+        Ok(FitInput {
+            light_label: light.label,
+            light: light
+                .data
+                .resample(grid, crate::spectrum::Interpolation::LIGHT),
+            basis_labels: basis.each_ref().map(|b| b.label.clone()),
+            basis: basis.each_ref().map(|b| {
+                b.data
+                    .resample(grid, crate::spectrum::Interpolation::SMOOTH)
+            }),
+            observer,
+            rule,
+            space,
+        })
+    }
+
     fn check(&self) -> Result<()> {
         let grid = self.light.grid();
         for (l, b) in self.basis_labels.iter().zip(&self.basis) {
@@ -721,27 +758,17 @@ pub fn round_trip(fit: &Fit, n: usize, space: &RgbSpace) -> RoundTrip {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::data;
-    use crate::spectrum::Interpolation;
 
     fn input(light: &str) -> FitInput {
-        let grid = WavelengthGrid::visible_1nm();
-        let l = data::spectrum(light).unwrap();
-        let basis = ["red", "green", "blue"].map(|p| {
-            data::spectrum(&format!("colorchecker:{p}"))
-                .unwrap()
-                .data
-                .resample(&grid, Interpolation::SMOOTH)
-        });
-        FitInput {
-            light_label: l.label,
-            light: l.data.resample(&grid, Interpolation::LIGHT),
-            basis_labels: ["red", "green", "blue"].map(|p| format!("colorchecker:{p}")),
-            basis,
-            observer: Observer::Cie1931,
-            rule: Rule::Riemann,
-            space: RgbSpace::SRGB,
-        }
+        FitInput::from_names(
+            light,
+            PAPER_BASIS,
+            &WavelengthGrid::visible_1nm(),
+            Observer::Cie1931,
+            Rule::Riemann,
+            RgbSpace::SRGB,
+        )
+        .unwrap()
     }
 
     #[test]

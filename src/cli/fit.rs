@@ -4,10 +4,9 @@ use super::{outln, ModeArg, SpaceArg};
 use anyhow::Context;
 use clap::Args;
 use specmap::colorimetry::{Observer, RgbSpace};
-use specmap::data;
 use specmap::fit::{self, FitInput, Mode};
 use specmap::plot::{self, Figure, Series};
-use specmap::spectrum::{Interpolation, Rule};
+use specmap::spectrum::Rule;
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -57,31 +56,20 @@ pub fn run(a: FitArgs) -> anyhow::Result<()> {
         anyhow::bail!("--rgb takes three comma-separated values, e.g. --rgb 1,0.5,0.2");
     }
     let space = RgbSpace::from(a.space);
-    let basis: Vec<data::NamedSpectrum> = a
-        .basis
-        .iter()
-        .map(|b| data::spectrum(b))
-        .collect::<Result<_, _>>()?;
     let modes: Vec<Mode> = a.mode.iter().map(|&m| Mode::from(m)).collect();
     let mut fits = Vec::new();
     for name in &a.light {
-        let light = data::spectrum(name)?;
-        let input = FitInput {
-            light_label: light.label.clone(),
-            light: light.data.resample(&a.spectral.range, Interpolation::LIGHT),
-            basis_labels: [0, 1, 2].map(|i| basis[i].label.clone()),
-            basis: [0, 1, 2].map(|i| {
-                basis[i]
-                    .data
-                    .resample(&a.spectral.range, Interpolation::SMOOTH)
-            }),
-            observer: Observer::from(a.spectral.observer),
-            rule: Rule::from(a.spectral.rule),
+        let input = FitInput::from_names(
+            name,
+            [&a.basis[0], &a.basis[1], &a.basis[2]].map(String::as_str),
+            &a.spectral.range,
+            Observer::from(a.spectral.observer),
+            Rule::from(a.spectral.rule),
             space,
-        };
+        )?;
         for &mode in &modes {
             let f = fit::fit(&input, mode)
-                .with_context(|| format!("fitting the basis for {}", light.label))?;
+                .with_context(|| format!("fitting the basis for {}", input.light_label))?;
             let rt = fit::round_trip(&f, 17, &space);
             fits.push((f, rt));
         }

@@ -14,7 +14,7 @@ use crate::envmap::sun::{find_sun, SunSearch, SunSettings};
 use crate::error::{Error, Result};
 use crate::fit::{self, Fit, FitInput, Mode};
 use crate::illuminant;
-use crate::spectrum::{Interpolation, Rule, Tabulated, WavelengthGrid};
+use crate::spectrum::{Rule, Tabulated, WavelengthGrid};
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -86,7 +86,7 @@ impl Default for ConvertOptions {
             fit: None,
             mode: Mode::Exact,
             space: RgbSpace::SRGB,
-            basis: ["red", "green", "blue"].map(|p| format!("colorchecker:{p}")),
+            basis: fit::PAPER_BASIS.map(String::from),
             observer: Observer::Cie1931,
             rule: Rule::Riemann,
             sun: Some(SunSettings::default()),
@@ -270,23 +270,14 @@ pub fn convert(
     let fit = match &opts.fit {
         Some(f) => f.clone(),
         None => {
-            let light = data::spectrum(&light_name)?;
-            let basis = opts
-                .basis
-                .clone()
-                .map(|b| data::spectrum(&b).map(|s| (s.label, s.data)));
-            let [b0, b1, b2] = basis;
-            let (b0, b1, b2) = (b0?, b1?, b2?);
-            let grid = opts.grid;
-            let input = FitInput {
-                light_label: light.label.clone(),
-                light: light.data.resample(&grid, Interpolation::LIGHT),
-                basis_labels: [b0.0, b1.0, b2.0],
-                basis: [&b0.1, &b1.1, &b2.1].map(|t| t.resample(&grid, Interpolation::SMOOTH)),
-                observer: opts.observer,
-                rule: opts.rule,
-                space: opts.space,
-            };
+            let input = FitInput::from_names(
+                &light_name,
+                opts.basis.each_ref().map(String::as_str),
+                &opts.grid,
+                opts.observer,
+                opts.rule,
+                opts.space,
+            )?;
             fit::fit(&input, opts.mode)?
         }
     };

@@ -207,26 +207,19 @@ mod tests {
     use super::*;
     use crate::colorimetry::Observer;
     use crate::data;
-    use crate::fit::{fit, FitInput, Mode};
+    use crate::fit::{fit, FitInput, Mode, PAPER_BASIS};
 
     fn engine(light: &str, mode: Mode, grid: &str, sun: bool) -> Engine {
         let grid: WavelengthGrid = grid.parse().unwrap();
-        let l = data::spectrum(light).unwrap();
-        let names = ["red", "green", "blue"].map(|p| format!("colorchecker:{p}"));
-        let input = FitInput {
-            light_label: l.label.clone(),
-            light: l.data.resample(&grid, Interpolation::LIGHT),
-            basis: names.clone().map(|n| {
-                data::spectrum(&n)
-                    .unwrap()
-                    .data
-                    .resample(&grid, Interpolation::SMOOTH)
-            }),
-            basis_labels: names,
-            observer: Observer::Cie1931,
-            rule: Rule::Riemann,
-            space: RgbSpace::SRGB,
-        };
+        let input = FitInput::from_names(
+            light,
+            PAPER_BASIS,
+            &grid,
+            Observer::Cie1931,
+            Rule::Riemann,
+            RgbSpace::SRGB,
+        )
+        .unwrap();
         let f = fit(&input, mode).unwrap();
         let d65 = data::spectrum("D65").unwrap().data;
         Engine::new(&f, grid, Rule::Riemann, sun.then_some(&d65)).unwrap()
