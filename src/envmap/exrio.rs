@@ -27,6 +27,12 @@ const IN_FLIGHT_BYTES: usize = 256 << 20;
 /// The most pixels an input image may have (2^31: 24 GiB as f32 RGB).
 const MAX_PIXELS: usize = 1 << 31;
 
+/// OpenEXR's name of a compression (`ZIP`, `DWAB`...), without the crate's parameters.
+fn compression_name(c: exr::compression::Compression) -> String {
+    let debug = format!("{c:?}");
+    debug.split('(').next().unwrap_or(&debug).to_uppercase()
+}
+
 /// The largest finite half-float value.
 pub const HALF_MAX: f32 = 65504.0;
 
@@ -408,7 +414,7 @@ fn read_exr_rgb(path: &Path, layer: Option<&str>) -> Result<InputImage> {
     };
     let mut description = format!(
         "OpenEXR, {}, {ty}, {chans}",
-        format!("{:?}", header.compression).to_uppercase()
+        compression_name(header.compression)
     );
     if headers.len() > 1 {
         description.push_str(&format!(" (part {part} of {})", headers.len()));
