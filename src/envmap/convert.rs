@@ -435,6 +435,8 @@ pub fn convert(
             .map(|(r, row)| {
                 let y = y0 + r;
                 let (mut a, mut b) = (Accumulator::default(), Accumulator::default());
+                // The basis format writes coefficients; the round trip still needs the spectrum.
+                let mut scratch = vec![0f32; bands];
                 for x in 0..width {
                     let i = y * width + x;
                     let rgb = map.image.pixels[i];
@@ -452,7 +454,6 @@ pub fn convert(
                             for k in 0..4 {
                                 out[k] = c[k] as f32;
                             }
-                            let mut scratch = vec![0f32; bands];
                             engine.spectrum(rgb, is_sun, &mut scratch).rgb_back
                         }
                     };
