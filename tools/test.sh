@@ -8,6 +8,24 @@ export CARGO_TERM_COLOR="${CARGO_TERM_COLOR:-never}"
 
 step() { printf '\n== %s\n' "$*"; }
 
+step "Software Vulkan adapter for the GPU renderer tests (Mesa lavapipe)"
+# The renderer's GPU/CPU agreement test runs on any Vulkan adapter; lavapipe is a CPU one, so
+# the test runs on machines without a GPU too. Needs root (CI runs as root) or the packages present.
+if ! dpkg -s mesa-vulkan-drivers libvulkan1 >/dev/null 2>&1; then
+  if [ "$(id -u)" = 0 ]; then
+    export DEBIAN_FRONTEND=noninteractive
+    apt-get install -y -qq mesa-vulkan-drivers libvulkan1 >/dev/null 2>&1 \
+      || { apt-get update -qq && apt-get install -y -qq mesa-vulkan-drivers libvulkan1 >/dev/null; }
+  else
+    echo "mesa-vulkan-drivers/libvulkan1 missing and not root: install them to run the GPU tests" >&2
+    exit 1
+  fi
+fi
+export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp/specmap-xdg-$(id -u)}"
+mkdir -p "$XDG_RUNTIME_DIR" && chmod 700 "$XDG_RUNTIME_DIR"
+# The GPU tests must run here, not skip: a missing adapter is a failure in this suite.
+export SPECMAP_REQUIRE_GPU=1
+
 step "Python venv for the interop tests (.venv)"
 if ! .venv/bin/python -c "import colour, tmm, OpenEXR, pytest, scipy" 2>/dev/null \
    || ! cmp -s tests/interop/requirements.txt .venv/.requirements 2>/dev/null; then
