@@ -65,6 +65,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         compression,
         envmap: Some(EnvmapAttr::LatLong),
         ev: None,
+        zip_level: specmap::envmap::exrio::ZIP_DEFAULT_LEVEL,
         attributes: vec![
             ("mainLight".into(), AttrValue::Text("D65".into())),
             ("fitMode".into(), AttrValue::Text("exact".into())),

@@ -7,6 +7,7 @@ use exr::prelude::{
 use specmap::envmap::exrio::{
     read_faces, read_rgb, read_spectral_info, read_spectral_rows, spectral_channel_name, AttrValue,
     ChannelSet, Compression, EnvmapAttr, Precision, SpectralLayout, SpectralWriter, FACE_NAMES,
+    ZIP_DEFAULT_LEVEL, ZIP_MAX_LEVEL,
 };
 use specmap::envmap::RgbImage;
 use std::path::{Path, PathBuf};
@@ -54,6 +55,7 @@ fn layout(
         envmap: None,
         ev: None,
         attributes: vec![],
+        zip_level: ZIP_DEFAULT_LEVEL,
     }
 }
 
@@ -174,6 +176,50 @@ fn spectral_round_trip_every_compression_and_precision() {
             assert_eq!((info.width, info.height), (w, h));
         }
     }
+}
+
+#[test]
+fn every_zip_level_reads_back_and_higher_levels_are_smaller() {
+    // Level 0 stores (each block raw, as OpenEXR does when compression does not help).
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (40, 37);
+    let set = || ChannelSet::Spectral {
+        wavelengths_nm: wavelengths(),
+        preview_rgb: true,
+    };
+    let mut sizes = vec![];
+    for (c, level) in [
+        (Compression::Zip, 0),
+        (Compression::Zip, 1),
+        (Compression::Zip, ZIP_DEFAULT_LEVEL),
+        (Compression::Zip, ZIP_MAX_LEVEL),
+        (Compression::Zips, 1),
+    ] {
+        let path = dir.path().join(format!("z{c:?}{level}.exr"));
+        let mut l = layout(w, h, set(), Precision::Float, c);
+        l.zip_level = level;
+        sizes.push(write_image(&path, l));
+        // The exr crate's reader (zune-inflate) gets every value back exactly.
+        let image = read_all_flat_layers_from_file(&path).unwrap();
+        for (k, ch) in image.layer_data[0].channel_data.list.iter().enumerate() {
+            let FlatSamples::F32(v) = &ch.sample_data else {
+                panic!("{k}: not f32")
+            };
+            let name = ch.name.to_string();
+            let c = set().names().iter().position(|n| *n == name).unwrap();
+            for (i, got) in v.iter().enumerate() {
+                assert_eq!(
+                    *got,
+                    value(i % w, i / w, c),
+                    "level {level}, {name}, sample {i}"
+                );
+            }
+        }
+    }
+    assert!(
+        sizes[0] > sizes[1] && sizes[1] >= sizes[2] && sizes[2] >= sizes[3],
+        "{sizes:?}"
+    );
 }
 
 fn exr_compression(c: Compression) -> exr::compression::Compression {

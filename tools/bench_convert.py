@@ -4,12 +4,16 @@
     .venv/bin/python tools/bench_convert.py [--big]
 
 1. Throughput on envmaps/sunrise.exr and forest.exr (1024x512): `specmap convert` (release build,
-   exact mode, D65, 380:780:5 = 81 bands + RGB, half, ZIP, sun off so both do the same work)
-   against numpy + colour-science + OpenEXR doing the same: read, clamp, fit the exact-mode matrix,
-   expand every pixel to 81 bands, write half/ZIP. Wall-clock seconds, best of 3.
+   exact mode, D65, 380:780:5 = 81 bands + RGB + sun mask, half, ZIP, sun off so both do the same
+   work) against numpy + colour-science + OpenEXR doing the same: read, clamp, fit the exact-mode
+   matrix, expand every pixel to 81 bands, write half/ZIP. The two outputs are checked to hold the
+   same channels and values. Wall-clock seconds, best of 3; specmap on all cores and on one
+   (RAYON_NUM_THREADS=1), and with --zip-level 1; the share of each run spent encoding the EXR.
 2. With --big: an 8192x4096 input (sunrise upsampled 8x, half, ZIP) converted by specmap under
    /usr/bin/time: peak resident memory and throughput.
 """
+import json
+import os
 import pathlib
 import re
 import subprocess
@@ -23,7 +27,7 @@ import OpenEXR
 import colour
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
-BIN = ROOT / "target" / "release" / "specmap"
+BIN = pathlib.Path(os.environ.get("CARGO_TARGET_DIR", ROOT / "target")) / "release" / "specmap"
 SHAPE = colour.SpectralShape(380, 780, 5)
 ARGS = ["--range", "380:780:5", "--precision", "half", "--compression", "zip", "--sun", "off",
         "--mode", "exact", "--light", "D65", "--quiet"]
@@ -46,40 +50,78 @@ def python_convert(src, dst):
     c = to_rgb @ (cmfs.T @ basis / y_norm)                 # RGB of each basis spectrum
     t = to_rgb @ (cmfs.T @ light / y_norm)                 # RGB of the light
     w = np.linalg.inv(c) @ np.diag(t)                      # exact mode
-    spectra = (rgb.reshape(-1, 3) @ w.T @ basis.T).astype(np.float16)
+    # One contiguous (bands, pixels) array: OpenEXR's binding wants each channel contiguous.
+    spectra = (basis @ w @ rgb.reshape(-1, 3).T).astype(np.float16)
     h, wd = rgb.shape[:2]
-    channels = {f"S0.{nm:.6f}".replace(".", ",", 1).replace("S0,", "S0.") + "nm":
-                spectra[:, i].reshape(h, wd) for i, nm in enumerate(SHAPE.wavelengths)}
+    channels = {"S0." + f"{nm:.6f}".replace(".", ",") + "nm": spectra[i].reshape(h, wd)
+                for i, nm in enumerate(SHAPE.wavelengths)}
     for i, name in enumerate("RGB"):
-        channels[name] = rgb[..., i].astype(np.float16)
+        channels[name] = np.ascontiguousarray(rgb[..., i]).astype(np.float16)
+    channels["sun"] = np.zeros((h, wd), np.float16)        # specmap writes the (empty) sun mask
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    t0 = time.perf_counter()
     with OpenEXR.File(header, channels) as f:
         f.write(str(dst))
+    return time.perf_counter() - t0
+
+
+def same_output(ours, theirs):
+    """Both conversions wrote the same channels and values (specmap may scale by 2^-EV)."""
+    with OpenEXR.File(str(ours), separate_channels=True) as f:
+        a = {c: v.pixels.astype(np.float32) for c, v in f.channels().items()}
+        scale = 2.0 ** float(f.header().get("EV", 0.0))
+    with OpenEXR.File(str(theirs), separate_channels=True) as f:
+        b = {c: v.pixels.astype(np.float32) for c, v in f.channels().items()}
+    assert sorted(a) == sorted(b), (sorted(set(a) ^ set(b)))
+    for c in a:
+        if c.startswith("S0."):
+            x, y = a[c] * scale, b[c]
+            assert np.allclose(x, y, rtol=2e-3, atol=1e-3 * y.max()), (c, np.abs(x - y).max())
 
 
 def best_of(n, f):
-    times = []
+    """The fastest of n runs of f: (seconds, f's result in that run)."""
+    runs = []
     for _ in range(n):
         t0 = time.perf_counter()
-        f()
-        times.append(time.perf_counter() - t0)
-    return min(times)
+        r = f()
+        runs.append((time.perf_counter() - t0, r))
+    return min(runs, key=lambda t: t[0])
+
+
+def specmap(src, dst, *extra, threads=None):
+    """Runs specmap convert; returns its seconds spent encoding the EXR (from --json)."""
+    env = dict(os.environ, **({"RAYON_NUM_THREADS": str(threads)} if threads else {}))
+    p = subprocess.run([BIN, "convert", src, "-o", dst, *ARGS, *extra, "--json"], check=True,
+                       capture_output=True, text=True, env=env)
+    return json.loads(p.stdout)["seconds_encode"]
 
 
 def main():
     subprocess.run(["cargo", "build", "--release", "-q"], cwd=ROOT, check=True)
+    cores = os.cpu_count()
     with tempfile.TemporaryDirectory() as tmp:
         tmp = pathlib.Path(tmp)
-        print("| input | specmap | Python (numpy + colour-science + OpenEXR) | ratio |")
-        print("|---|---:|---:|---:|")
+        print(f"| input | specmap, {cores} threads | specmap, 1 thread | specmap, --zip-level 1 "
+              "| Python (numpy + colour-science + OpenEXR) | ratio | ratio, 1 thread |")
+        print("|---|---:|---:|---:|---:|---:|---:|")
         for name in ("sunrise", "forest"):
             src = ROOT / "envmaps" / f"{name}.exr"
-            ours = best_of(3, lambda: subprocess.run(
-                [BIN, "convert", src, "-o", tmp / "ours.exr", *ARGS], check=True))
-            theirs = best_of(3, lambda: python_convert(src, tmp / "theirs.exr"))
+            ours, enc = best_of(3, lambda: specmap(src, tmp / "ours.exr"))
+            size = (tmp / "ours.exr").stat().st_size
+            one, enc1 = best_of(3, lambda: specmap(src, tmp / "one.exr", threads=1))
+            fast, _ = best_of(3, lambda: specmap(src, tmp / "fast.exr", "--zip-level", "1"))
+            fast_size = (tmp / "fast.exr").stat().st_size
+            theirs, write = best_of(3, lambda: python_convert(src, tmp / "theirs.exr"))
+            their_size = (tmp / "theirs.exr").stat().st_size
+            same_output(tmp / "ours.exr", tmp / "theirs.exr")
+            same_output(tmp / "fast.exr", tmp / "theirs.exr")
             mpix = 1024 * 512 / 1e6
-            print(f"| {name}.exr 1024x512 | {ours:.2f} s ({mpix / ours:.2f} Mpix/s) "
-                  f"| {theirs:.2f} s ({mpix / theirs:.2f} Mpix/s) | {theirs / ours:.1f}x |")
+            print(f"| {name}.exr 1024x512 | {ours:.2f} s ({mpix / ours:.2f} Mpix/s; EXR encoding "
+                  f"{enc / ours:.0%}; {size / 1e6:.1f} MB) | {one:.2f} s (encoding {enc1 / one:.0%}) "
+                  f"| {fast:.2f} s ({fast_size / 1e6:.1f} MB) | {theirs:.2f} s ({mpix / theirs:.2f} "
+                  f"Mpix/s; OpenEXR write {write / theirs:.0%}; {their_size / 1e6:.1f} MB) "
+                  f"| {theirs / ours:.1f}x | {theirs / one:.1f}x |")
         if "--big" in sys.argv:
             with OpenEXR.File(str(ROOT / "envmaps" / "sunrise.exr"), separate_channels=True) as f:
                 ch = f.channels()

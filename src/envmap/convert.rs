@@ -37,6 +37,10 @@ pub enum SunSpd {
     Light(String),
 }
 
+/// The most bytes of f32 rows computed before they are written (one batch; the writer's blocks
+/// and their compressed form come on top, about as much again).
+const BATCH_BYTES: usize = 96 << 20;
+
 /// What is written.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
@@ -75,6 +79,8 @@ pub struct ConvertOptions {
     pub format: OutputFormat,
     pub precision: Precision,
     pub compression: Compression,
+    /// The zlib level of ZIP/ZIPS (OpenEXR's default 4; 1 is fastest, 12 smallest).
+    pub zip_level: u8,
     /// NaN or infinite pixels are an error instead of being set to 0.
     pub strict: bool,
 }
@@ -100,6 +106,7 @@ impl Default for ConvertOptions {
             format: OutputFormat::Spectral,
             precision: Precision::Half,
             compression: Compression::Zip,
+            zip_level: crate::envmap::exrio::ZIP_DEFAULT_LEVEL,
             strict: false,
         }
     }
@@ -155,6 +162,8 @@ pub struct ConvertReport {
     pub roundtrip_without_sun: RoundTripStats,
     pub seconds_read: f64,
     pub seconds_convert: f64,
+    /// The part of `seconds_convert` spent encoding and compressing the EXR blocks.
+    pub seconds_encode: f64,
     pub megapixels_per_second: f64,
 }
 
@@ -215,7 +224,7 @@ fn same_file(a: &Path, b: &Path) -> bool {
 }
 
 /// Converts `input` to a spectral (or basis) OpenEXR at `output`. `progress(done, total)` is
-/// called after each block of rows.
+/// called after each batch of rows.
 pub fn convert(
     input: &str,
     output: &Path,
@@ -417,12 +426,18 @@ pub fn convert(
             envmap,
             ev,
             attributes,
+            zip_level: opts.zip_level,
         },
     )?;
 
     // Stream blocks of rows, computed in parallel.
     let t1 = Instant::now();
-    let rows_per_block = opts.compression.lines_per_block().max(16);
+    // Rows are computed, then written, a batch at a time: whole compression blocks, enough for
+    // the writer to compress them in parallel, within BATCH_BYTES.
+    let lines = opts.compression.lines_per_block();
+    let block_bytes = lines * width * per_pixel * std::mem::size_of::<f32>();
+    let blocks = (BATCH_BYTES / block_bytes.max(1)).clamp(1, height.div_ceil(lines));
+    let rows_per_block = (blocks * lines).max(16).min(height);
     let mut buffer = vec![0f32; rows_per_block * width * per_pixel];
     let (mut all, mut no_sun) = (Accumulator::default(), Accumulator::default());
     let mut y0 = 0;
@@ -478,6 +493,7 @@ pub fn convert(
         y0 += rows;
         progress(y0, height);
     }
+    let seconds_encode = writer.encode_seconds();
     let bytes = writer.finish()?;
     let seconds_convert = t1.elapsed().as_secs_f64();
 
@@ -512,6 +528,7 @@ pub fn convert(
         roundtrip_without_sun: no_sun.stats(),
         seconds_read,
         seconds_convert,
+        seconds_encode,
         megapixels_per_second: (input_size[0] * input_size[1]) as f64
             / 1e6
             / (seconds_read + seconds_convert),

@@ -6,7 +6,7 @@
 //! of RGB (1,1,1), have Y = 1. So RGB (1,1,1) under D65 becomes D65 scaled to Y = 1.
 //! Sun pixels get the sun's SPD at the luminance their own conversion would have had.
 
-use crate::colorimetry::{delta_e_2000, Cmfs, Lab, RgbSpace, Xyz};
+use crate::colorimetry::{delta_e_2000, Cmfs, Lab, Xyz};
 use crate::error::{Error, Result};
 use crate::fit::{Fit, Upsampler};
 use crate::spectrum::{Interpolation, Rule, Spectrum, Tabulated, WavelengthGrid};
@@ -17,7 +17,6 @@ use nalgebra::{Matrix3, Vector3};
 pub struct Engine {
     grid: WavelengthGrid,
     upsampler: Upsampler,
-    space: RgbSpace,
     /// B_j = MCC_j * S * k on the output grid, k making Y(S) = 1.
     basis: [Vec<f32>; 3],
     /// Luminance of each basis spectrum.
@@ -30,6 +29,9 @@ pub struct Engine {
     sun: Option<(Vec<f32>, Vector3<f64>)>,
     /// RGB -> luminance row of the space.
     y_row: [f64; 3],
+    /// RGB -> XYZ (x100, as `RgbSpace::xyz_from_rgb`), computed once: the round trip needs it
+    /// per pixel.
+    to_xyz: nalgebra::Matrix3<f64>,
     white: Xyz,
 }
 
@@ -104,13 +106,13 @@ impl Engine {
         Ok(Engine {
             grid,
             upsampler: Upsampler::new(fit, &space),
-            space,
             basis,
             basis_y,
             basis_rgb,
             light_rgb: rgb_of(&light)?,
             sun,
             y_row: [m[(1, 0)], m[(1, 1)], m[(1, 2)]],
+            to_xyz: m * 100.0,
             white: space.xyz_from_rgb([1.0, 1.0, 1.0]),
         })
     }
@@ -195,9 +197,10 @@ impl Engine {
         }
         let input = [rgb[0] as f64 / y, rgb[1] as f64 / y, rgb[2] as f64 / y];
         let out = back.map(|v| v / y);
+        let xyz = |v: [f64; 3]| Xyz((self.to_xyz * nalgebra::Vector3::from(v)).into());
         delta_e_2000(
-            Lab::from_xyz(self.space.xyz_from_rgb(input), self.white),
-            Lab::from_xyz(self.space.xyz_from_rgb(out), self.white),
+            Lab::from_xyz(xyz(input), self.white),
+            Lab::from_xyz(xyz(out), self.white),
         )
     }
 }
@@ -205,7 +208,7 @@ impl Engine {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::colorimetry::Observer;
+    use crate::colorimetry::{Observer, RgbSpace};
     use crate::data;
     use crate::fit::{fit, FitInput, Mode, PAPER_BASIS};
 

@@ -3,8 +3,9 @@
 use super::RgbImage;
 use crate::error::{Error, Result};
 use exr::block::chunk::TileCoordinates;
+use exr::block::chunk::{Chunk, CompressedBlock, CompressedScanLineBlock};
 use exr::block::reader::ChunksReader;
-use exr::block::writer::{ChunksWriter, ParallelBlocksCompressor};
+use exr::block::writer::ChunksWriter;
 use exr::block::{BlockIndex, UncompressedBlock};
 use exr::math::Vec2;
 use exr::meta::attribute::{
@@ -13,6 +14,8 @@ use exr::meta::attribute::{
 use exr::meta::header::Header;
 use exr::meta::{BlockDescription, MetaData};
 use exr::prelude::f16;
+use half::slice::HalfFloatSliceExt;
+use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::fs::File;
 use std::io::{BufReader, BufWriter, Read};
@@ -20,9 +23,8 @@ use std::path::{Path, PathBuf};
 use std::sync::mpsc::{sync_channel, SyncSender};
 use std::thread::JoinHandle;
 
-/// The most bytes of uncompressed blocks the writer keeps in flight (it compresses on fewer
-/// threads when blocks are large).
-const IN_FLIGHT_BYTES: usize = 256 << 20;
+/// Compressed blocks queued for the file-writing thread.
+const QUEUED_CHUNKS: usize = 16;
 
 /// The most pixels an input image may have (2^31: 24 GiB as f32 RGB).
 const MAX_PIXELS: usize = 1 << 31;
@@ -591,7 +593,12 @@ pub struct SpectralLayout {
     pub ev: Option<f64>,
     /// Extra header attributes (the fit's parameters...). Must not reuse reserved names.
     pub attributes: Vec<(String, AttrValue)>,
+    /// The zlib level of ZIP and ZIPS (0 stores, 1 fastest, 12 smallest; OpenEXR's default is
+    /// [`ZIP_DEFAULT_LEVEL`]). Other compressions ignore it.
+    pub zip_level: u8,
 }
+
+pub use super::zip::{DEFAULT_LEVEL as ZIP_DEFAULT_LEVEL, MAX_LEVEL as ZIP_MAX_LEVEL};
 
 /// The channel name of an emissive band in the Fichet et al. (2021) layout: `S0.550,000000nm`.
 pub fn spectral_channel_name(nm: f64) -> String {
@@ -643,13 +650,16 @@ fn attr_from_exr(v: &AttributeValue) -> Option<AttrValue> {
     })
 }
 
-type Block = (usize, UncompressedBlock);
+/// A compressed block and its index in increasing-y order.
+type Encoded = (usize, Chunk);
 
-/// Writes a spectral OpenEXR row by row: each complete block is handed to a compressor thread
-/// (which compresses on rayon's threads when the compression allows) and written at once, so
-/// memory holds a few blocks, never the image. The file is written to a temporary path beside
-/// the destination and renamed into place by [`SpectralWriter::finish`]; dropping the writer
-/// without finishing deletes the temporary file.
+/// Writes a spectral OpenEXR row by row. Complete blocks of rows are encoded (half or float
+/// samples, channels in file order) and compressed in parallel on rayon's threads, then handed
+/// to a thread that writes them, so memory holds the rows of one call and their compressed
+/// blocks, never the image. ZIP and ZIPS use libdeflate as OpenEXR does ([`super::zip`]); the
+/// other compressions use the `exr` crate's compressors. The file is written to a temporary path
+/// beside the destination and renamed into place by [`SpectralWriter::finish`]; dropping the
+/// writer without finishing deletes the temporary file.
 pub struct SpectralWriter {
     dest: PathBuf,
     tmp: PathBuf,
@@ -663,12 +673,17 @@ pub struct SpectralWriter {
     half: bool,
     scale: f32,
     lines_per_block: usize,
+    compression: Compression,
+    zip_level: u8,
+    /// The file's header, for the `exr` crate's compressors.
+    headers: exr::meta::Headers,
     /// Caller rows of the block being filled.
     pending: Vec<f32>,
     next_y: usize,
-    sender: Option<SyncSender<Block>>,
+    sender: Option<SyncSender<Encoded>>,
     worker: Option<JoinHandle<exr::error::Result<()>>>,
     finished: bool,
+    encode_seconds: f64,
 }
 
 impl SpectralWriter {
@@ -684,6 +699,7 @@ impl SpectralWriter {
             envmap,
             ev,
             attributes,
+            zip_level,
         } = layout;
         if width == 0 || height == 0 {
             return Err(Error::invalid(format!(
@@ -790,43 +806,16 @@ impl SpectralWriter {
         let tmp = crate::io::temp_path_for(dest)?;
         let file = File::create(&tmp).map_err(|e| io_err(&tmp, e))?;
         let lines_per_block = exr_compression.scan_lines_per_block();
-        // Blocks in flight: one in the channel, up to threads + 2 in the compressor, each
-        // also compressed; the thread count is capped so they stay within IN_FLIGHT_BYTES.
-        let sample_bytes = if precision == Precision::Half { 2 } else { 4 };
-        let block_bytes = lines_per_block * width * names.len() * sample_bytes;
-        let threads = rayon::current_num_threads()
-            .min((IN_FLIGHT_BYTES / (2 * block_bytes.max(1))).saturating_sub(3))
-            .max(1);
-        let (sender, receiver) = sync_channel::<Block>(1);
+        let (sender, receiver) = sync_channel::<Encoded>(QUEUED_CHUNKS);
+        let file_headers = headers.clone();
         let worker = std::thread::Builder::new()
             .name("specmap exr writer".into())
             .spawn(move || {
-                exr::block::write(BufWriter::new(file), headers, true, |meta, chunks| {
-                    let parallel = if threads > 1 {
-                        ParallelBlocksCompressor::new_with_thread_pool(&meta, chunks, || {
-                            rayon::ThreadPoolBuilder::new()
-                                .num_threads(threads)
-                                .thread_name(|i| format!("specmap exr compressor {i}"))
-                                .build()
-                        })
-                    } else {
-                        None
-                    };
-                    match parallel {
-                        Some(mut par) => {
-                            for (i, block) in receiver {
-                                par.add_block_to_compression_queue(i, block)?;
-                            }
-                            par.write_all_queued_chunks()
-                        }
-                        None => {
-                            let mut seq = chunks.sequential_blocks_compressor(&meta);
-                            for (i, block) in receiver {
-                                seq.compress_block(i, block)?;
-                            }
-                            Ok(())
-                        }
+                exr::block::write(BufWriter::new(file), file_headers, true, |_, chunks| {
+                    for (i, chunk) in receiver {
+                        chunks.write_chunk(i, chunk)?;
                     }
+                    Ok(())
                 })
             })
             .map_err(|e| {
@@ -844,11 +833,15 @@ impl SpectralWriter {
             half: precision == Precision::Half,
             scale,
             lines_per_block,
+            compression,
+            zip_level,
+            headers,
             pending: Vec::new(),
             next_y: 0,
             sender: Some(sender),
             worker: Some(worker),
             finished: false,
+            encode_seconds: 0.0,
         })
     }
 
@@ -889,22 +882,61 @@ impl SpectralWriter {
             )));
         }
         self.check_values(y0, rows)?;
+        let started = std::time::Instant::now();
         let mut rest = rows;
-        while !rest.is_empty() {
+        // The block being filled, once complete, then the complete blocks within `rows`.
+        let mut filled = Vec::new();
+        if !self.pending.is_empty() {
             let block_y = self.next_y - self.pending.len() / row_len;
-            let block_lines = self.lines_per_block.min(self.height - block_y);
-            let want = block_lines * row_len - self.pending.len();
+            let want = self.block_lines(block_y) * row_len - self.pending.len();
             let take = want.min(rest.len());
             self.pending.extend_from_slice(&rest[..take]);
             rest = &rest[take..];
             self.next_y += take / row_len;
-            if self.pending.len() == block_lines * row_len {
-                let block = self.encode_block(block_y, block_lines);
-                self.pending.clear();
-                self.send(block)?;
+            if take == want {
+                filled = std::mem::take(&mut self.pending);
             }
         }
+        let mut jobs: Vec<(usize, &[f32])> = Vec::new();
+        if !filled.is_empty() {
+            jobs.push((self.next_y - filled.len() / row_len, &filled));
+        }
+        if self.pending.is_empty() {
+            while !rest.is_empty() {
+                let n = self.block_lines(self.next_y) * row_len;
+                if rest.len() < n {
+                    break;
+                }
+                jobs.push((self.next_y, &rest[..n]));
+                rest = &rest[n..];
+                self.next_y += n / row_len;
+            }
+            self.pending.extend_from_slice(rest);
+            self.next_y += rest.len() / row_len;
+        }
+        let this = &*self;
+        let chunks = jobs
+            .par_iter()
+            .map_init(
+                || super::zip::ZipEncoder::new(this.zip_level),
+                |zip, &(block_y, block)| this.encode_block(zip, block_y, block),
+            )
+            .collect::<Result<Vec<Encoded>>>()?;
+        for chunk in chunks {
+            self.send(chunk)?;
+        }
+        self.encode_seconds += started.elapsed().as_secs_f64();
         Ok(())
+    }
+
+    /// Scan lines in the block that starts at row `block_y`.
+    fn block_lines(&self, block_y: usize) -> usize {
+        self.lines_per_block.min(self.height - block_y)
+    }
+
+    /// Wall-clock seconds spent encoding and compressing blocks so far.
+    pub fn encode_seconds(&self) -> f64 {
+        self.encode_seconds
     }
 
     fn check_values(&self, y0: usize, rows: &[f32]) -> Result<()> {
@@ -940,38 +972,104 @@ impl SpectralWriter {
         Ok(())
     }
 
-    fn encode_block(&self, block_y: usize, lines: usize) -> Block {
+    /// One block of caller rows as an OpenEXR chunk: samples scan line by scan line, channels
+    /// in file order, then compressed.
+    fn encode_block(
+        &self,
+        zip: &mut super::zip::ZipEncoder,
+        block_y: usize,
+        rows: &[f32],
+    ) -> Result<Encoded> {
         let w = self.width;
+        let lines = rows.len() / (w * self.per_pixel);
         let bytes_per = if self.half { 2 } else { 4 };
-        let mut data = Vec::with_capacity(lines * w * self.per_pixel * bytes_per);
-        for line in 0..lines {
-            let row = &self.pending[line * w * self.per_pixel..(line + 1) * w * self.per_pixel];
-            for &c in &self.file_order {
-                let values = row.iter().skip(c).step_by(self.per_pixel);
+        // The exr crate's compressors take native-endian samples; the file holds little-endian.
+        let own = matches!(
+            self.compression,
+            Compression::None | Compression::Zip | Compression::Zips
+        );
+        let channels = self.file_order.len();
+        let mut data = vec![0u8; rows.len() * bytes_per];
+        // One scan line, channel-major (file order), f32 then half.
+        let mut planar = vec![0f32; channels * w];
+        let mut halves = vec![f16::ZERO; if self.half { w } else { 0 }];
+        let line_bytes = channels * w * bytes_per;
+        for (row, out) in rows
+            .chunks_exact(w * self.per_pixel)
+            .zip(data.chunks_exact_mut(line_bytes))
+        {
+            // Transposed a tile of pixels at a time: the tile stays in L1 while each channel's
+            // values are gathered from it and written as one run.
+            const TILE: usize = 32;
+            for (t, tile) in row.chunks(TILE * self.per_pixel).enumerate() {
+                let x0 = t * TILE;
+                for (k, &c) in self.file_order.iter().enumerate() {
+                    let dst = &mut planar[k * w + x0..];
+                    for (d, px) in dst.iter_mut().zip(tile.chunks_exact(self.per_pixel)) {
+                        *d = px[c];
+                    }
+                }
+            }
+            if self.scale != 1.0 {
+                planar.iter_mut().for_each(|v| *v *= self.scale);
+            }
+            let out_lines = out.chunks_exact_mut(w * bytes_per);
+            for (line, dst) in planar.chunks_exact(w).zip(out_lines) {
                 if self.half {
-                    for &v in values {
-                        data.extend_from_slice(&f16::from_f32(v * self.scale).to_ne_bytes());
+                    halves.convert_from_f32_slice(line);
+                    for (d, v) in dst.chunks_exact_mut(2).zip(&halves) {
+                        d.copy_from_slice(&if own {
+                            v.to_le_bytes()
+                        } else {
+                            v.to_ne_bytes()
+                        });
                     }
                 } else {
-                    for &v in values {
-                        data.extend_from_slice(&(v * self.scale).to_ne_bytes());
+                    for (d, v) in dst.chunks_exact_mut(4).zip(line) {
+                        d.copy_from_slice(&if own {
+                            v.to_le_bytes()
+                        } else {
+                            v.to_ne_bytes()
+                        });
                     }
                 }
             }
         }
-        let index = BlockIndex {
-            layer: 0,
-            pixel_position: Vec2(0, block_y),
-            pixel_size: Vec2(w, lines),
-            level: Vec2(0, 0),
+        let index = block_y / self.lines_per_block;
+        let compressed_pixels_le = match self.compression {
+            Compression::None => data,
+            Compression::Zip | Compression::Zips => zip.encode(&data),
+            _ => {
+                let block = UncompressedBlock {
+                    index: BlockIndex {
+                        layer: 0,
+                        pixel_position: Vec2(0, block_y),
+                        pixel_size: Vec2(w, lines),
+                        level: Vec2(0, 0),
+                    },
+                    data,
+                };
+                let chunk = block.compress_to_chunk(&self.headers).map_err(|e| {
+                    Error::invalid(format!(
+                        "{}: compressing rows {block_y}..{} failed: {e}",
+                        self.dest.display(),
+                        block_y + lines
+                    ))
+                })?;
+                return Ok((index, chunk));
+            }
         };
-        (
-            block_y / self.lines_per_block,
-            UncompressedBlock { index, data },
-        )
+        let chunk = Chunk {
+            layer_index: 0,
+            compressed_block: CompressedBlock::ScanLine(CompressedScanLineBlock {
+                y_coordinate: block_y as i32,
+                compressed_pixels_le,
+            }),
+        };
+        Ok((index, chunk))
     }
 
-    fn send(&mut self, block: Block) -> Result<()> {
+    fn send(&mut self, block: Encoded) -> Result<()> {
         let ok = self.sender.as_ref().is_some_and(|s| s.send(block).is_ok());
         if ok {
             Ok(())
