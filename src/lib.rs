@@ -6,6 +6,7 @@
 //! - [`colorimetry`]: SPD -> XYZ (the paper's Eq. 10/11), RGB spaces, CIELAB, CIEDE2000, CCT;
 //! - [`fit`]: the paper's per-light basis weights, exact and non-negative modes, the round trip;
 //! - [`thinfilm`]: multilayer thin-film interference (paper Eq. 2-9 for N layers);
+//! - [`tradeoff`]: colour error against time for wavelength grids and rules; `--tolerance`;
 //! - [`plot`], [`io`]: PNG/SVG plots and safe (temporary file + rename) output.
 
 pub mod colorimetry;
@@ -18,5 +19,6 @@ pub mod io;
 pub mod plot;
 pub mod spectrum;
 pub mod thinfilm;
+pub mod tradeoff;
 
 pub use error::{Error, Result};

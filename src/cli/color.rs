@@ -6,6 +6,7 @@ use clap::Args;
 use specmap::colorimetry::{cct, srgb8, Cmfs, Lab, Observer, RgbSpace, Xyz, D65_XY};
 use specmap::data;
 use specmap::spectrum::{Interpolation, Rule};
+use specmap::tradeoff::{choose_grid, Stimulus, Surface};
 
 #[derive(Debug, Args)]
 pub struct ColorArgs {
@@ -20,6 +21,10 @@ pub struct ColorArgs {
     /// RGB space for `linear_rgb` (linear_srgb and srgb8 are always sRGB).
     #[arg(long, value_enum, default_value_t = SpaceArg::Srgb)]
     space: SpaceArg,
+    /// Choose the coarsest wavelength step (within --range) whose colour stays within this
+    /// CIEDE2000 of a 1 nm Simpson reference, and report it.
+    #[arg(long, value_name = "DE")]
+    tolerance: Option<f64>,
     /// Machine-readable output.
     #[arg(long)]
     json: bool,
@@ -28,10 +33,30 @@ pub struct ColorArgs {
 pub fn run(a: ColorArgs) -> anyhow::Result<()> {
     let observer = Observer::from(a.spectral.observer);
     let rule = Rule::from(a.spectral.rule);
-    let range = a.spectral.range;
+    let mut range = a.spectral.range;
     let space = RgbSpace::from(a.space);
-    let cmfs = Cmfs::new(observer, &range)?;
     let spd = data::spectrum(&a.spd)?;
+    let choice = match a.tolerance {
+        None => None,
+        Some(tolerance) => {
+            let stimulus = match &a.under {
+                Some(light) => {
+                    let light = data::spectrum(light)?;
+                    Stimulus {
+                        name: format!("{} under {}", spd.label, light.label),
+                        light: light.data,
+                        surface: Surface::Reflectance(spd.data.clone()),
+                    }
+                }
+                None => Stimulus::emitter(spd.label.clone(), spd.data.clone()),
+            };
+            let (start, end) = (range.start_nm(), range.end_nm());
+            let c = choose_grid(&[stimulus], observer, start, end, rule, tolerance)?;
+            range = c.chosen.clone();
+            Some(c)
+        }
+    };
+    let cmfs = Cmfs::new(observer, &range)?;
     let (xyz, white, under_label) = match &a.under {
         Some(light) => {
             let light = data::spectrum(light)?;
@@ -71,6 +96,7 @@ pub fn run(a: ColorArgs) -> anyhow::Result<()> {
             "space": space.name,
             "linear_rgb": linear_rgb,
             "lab": lab.0,
+            "grid_choice": choice,
             "lab_white": if under_label.is_some() { "the light (perfect reflector = L* 100)" } else { "D65, Y = 100" },
         });
         super::emit(&(serde_json::to_string_pretty(&doc)? + "\n"));
@@ -82,6 +108,9 @@ pub fn run(a: ColorArgs) -> anyhow::Result<()> {
     };
     let mut out = String::new();
     outln!(out, "{what}\n  {observer}, {} nm, {rule} rule", range);
+    if let Some(c) = &choice {
+        super::write_grid_choice(&mut out, c);
+    }
     super::write_xyz(&mut out, xyz);
     match temperature.kelvin {
         Some(k) => outln!(

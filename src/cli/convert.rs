@@ -52,6 +52,10 @@ pub struct ConvertArgs {
     /// Output wavelengths START:END:STEP in nm.
     #[arg(long, default_value = "380:780:5")]
     range: specmap::spectrum::WavelengthGrid,
+    /// Choose the coarsest wavelength step within --range that keeps the ColorChecker under the
+    /// main light (and the sun's SPD) within this CIEDE2000 of a 1 nm reference; report it.
+    #[arg(long, value_name = "DE")]
+    tolerance: Option<f64>,
     /// `spectral`: one channel per wavelength (Fichet 2021) + RGB preview + sun mask; `basis`:
     /// c_R, c_G, c_B, sun with the basis spectra in the header.
     #[arg(long, value_enum, default_value_t = FormatArg::Spectral)]
@@ -197,6 +201,7 @@ pub fn run(a: ConvertArgs) -> anyhow::Result<()> {
         },
         zip_level: a.zip_level,
         strict: a.strict,
+        tolerance: a.tolerance,
         ..ConvertOptions::default()
     };
     let bar = (!a.quiet && std::io::stderr().is_terminal()).then(|| {
@@ -248,6 +253,9 @@ pub fn run(a: ConvertArgs) -> anyhow::Result<()> {
     match &r.light_choice {
         Some(c) => outln!(out, "  light        {} (auto: {})", r.light, c.reason),
         None => outln!(out, "  light        {}", r.light),
+    }
+    if let Some(c) = &r.grid_choice {
+        super::write_grid_choice(&mut out, c);
     }
     outln!(
         out,

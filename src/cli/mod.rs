@@ -96,6 +96,39 @@ pub fn write_xyz(out: &mut String, xyz: specmap::colorimetry::Xyz) {
     outln!(out, "  xy           {:>10.5} {:>10.5}", xy[0], xy[1]);
 }
 
+/// Appends what `--tolerance` chose.
+pub fn write_grid_choice(out: &mut String, c: &specmap::tradeoff::GridChoice) {
+    let tried: Vec<String> = c
+        .tried
+        .iter()
+        .map(|(step, de)| format!("{step} nm: {de:.3}"))
+        .collect();
+    if c.met {
+        outln!(
+            out,
+            "  grid         {} chosen: the coarsest step with CIEDE2000 <= {} against 1 nm \
+             Simpson ({:.3}, largest for {}; {} stimuli; tried {})",
+            c.grid,
+            c.tolerance_de2000,
+            c.max_de2000,
+            c.worst,
+            c.stimuli,
+            tried.join(", ")
+        );
+    } else {
+        outln!(
+            out,
+            "  grid         {}: NO step meets CIEDE2000 <= {}; the finest tried still gives {:.3} \
+             (for {}; tried {})",
+            c.grid,
+            c.tolerance_de2000,
+            c.max_de2000,
+            c.worst,
+            tried.join(", ")
+        );
+    }
+}
+
 /// Appends the 8-bit sRGB line (with its hex code).
 pub fn write_srgb8(out: &mut String, code: [u8; 3]) {
     let [r, g, b] = code;

@@ -15,6 +15,7 @@ use crate::error::{Error, Result};
 use crate::fit::{self, Fit, FitInput, Mode};
 use crate::illuminant;
 use crate::spectrum::{Rule, Tabulated, WavelengthGrid};
+use crate::tradeoff::{choose_grid, colorchecker_under, GridChoice};
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -81,6 +82,9 @@ pub struct ConvertOptions {
     pub compression: Compression,
     /// The zlib level of ZIP/ZIPS (OpenEXR's default 4; 1 is fastest, 12 smallest).
     pub zip_level: u8,
+    /// Choose the coarsest wavelength step within `grid`'s range whose colours stay within this
+    /// CIEDE2000 of a 1 nm reference (see [`crate::tradeoff`]).
+    pub tolerance: Option<f64>,
     /// NaN or infinite pixels are an error instead of being set to 0.
     pub strict: bool,
 }
@@ -107,6 +111,7 @@ impl Default for ConvertOptions {
             precision: Precision::Half,
             compression: Compression::Zip,
             zip_level: crate::envmap::exrio::ZIP_DEFAULT_LEVEL,
+            tolerance: None,
             strict: false,
         }
     }
@@ -164,6 +169,8 @@ pub struct ConvertReport {
     pub seconds_convert: f64,
     /// The part of `seconds_convert` spent encoding and compressing the EXR blocks.
     pub seconds_encode: f64,
+    /// What `--tolerance` chose (None: the grid was given).
+    pub grid_choice: Option<GridChoice>,
     pub megapixels_per_second: f64,
 }
 
@@ -276,21 +283,6 @@ pub fn convert(
             (c.light.clone(), Some(c))
         }
     };
-    let fit = match &opts.fit {
-        Some(f) => f.clone(),
-        None => {
-            let input = FitInput::from_names(
-                &light_name,
-                opts.basis.each_ref().map(String::as_str),
-                &opts.grid,
-                opts.observer,
-                opts.rule,
-                opts.space,
-            )?;
-            fit::fit(&input, opts.mode)?
-        }
-    };
-
     // The sun's SPD.
     let sun_spd: Option<(String, Tabulated)> = match (sun.sun(), &opts.sun_spd) {
         (None, _) => None,
@@ -312,7 +304,44 @@ pub fn convert(
             Some((s.label, s.data))
         }
     };
-    let engine = Engine::new(&fit, opts.grid, opts.rule, sun_spd.as_ref().map(|(_, t)| t))?;
+    // The grid: as given, or the coarsest step within its range that keeps the ColorChecker
+    // under the main light (and under the sun's SPD) within --tolerance.
+    let grid_choice = match opts.tolerance {
+        None => None,
+        Some(tolerance) => {
+            let light_spd = data::spectrum(&light_name)?;
+            let mut stimuli = colorchecker_under(&light_spd.label, &light_spd.data)?;
+            if let Some((label, spd)) = &sun_spd {
+                stimuli.extend(colorchecker_under(&format!("sun ({label})"), spd)?);
+            }
+            let (start, end) = (opts.grid.start_nm(), opts.grid.end_nm());
+            Some(choose_grid(
+                &stimuli,
+                opts.observer,
+                start,
+                end,
+                opts.rule,
+                tolerance,
+            )?)
+        }
+    };
+    let grid = grid_choice.as_ref().map_or(opts.grid, |c| c.chosen);
+    let fit = match &opts.fit {
+        Some(f) => f.clone(),
+        None => {
+            let input = FitInput::from_names(
+                &light_name,
+                opts.basis.each_ref().map(String::as_str),
+                &grid,
+                opts.observer,
+                opts.rule,
+                opts.space,
+            )?;
+            fit::fit(&input, opts.mode)?
+        }
+    };
+
+    let engine = Engine::new(&fit, grid, opts.rule, sun_spd.as_ref().map(|(_, t)| t))?;
     let sun_mask = {
         let mut m = vec![false; map.image.pixels.len()];
         if sun_spd.is_some() {
@@ -326,7 +355,7 @@ pub fn convert(
     };
 
     // The channels.
-    let wavelengths: Vec<f64> = opts.grid.wavelengths_nm().collect();
+    let wavelengths: Vec<f64> = grid.wavelengths_nm().collect();
     let bands = wavelengths.len();
     let names: Vec<String> = match opts.format {
         OutputFormat::Spectral => wavelengths
@@ -526,6 +555,7 @@ pub fn convert(
         bytes,
         roundtrip: all.stats(),
         roundtrip_without_sun: no_sun.stats(),
+        grid_choice,
         seconds_read,
         seconds_convert,
         seconds_encode,

@@ -1,0 +1,403 @@
+//! Speed for accuracy: the colour error of a wavelength grid and integration rule against a 1 nm
+//! Simpson reference, and the coarsest grid that a scene's lights, surfaces and films need.
+//!
+//! A *stimulus* is what reaches the eye: a light seen directly, a reflectance under a light, or
+//! a thin film under a light. Its colour on a grid is the paper's Eq. 10/11 with the light, the
+//! surface and the CMFs all sampled on that grid (lights interpolated linearly, smooth data by
+//! Sprague/spline, films evaluated at each wavelength), as a spectral renderer working at that
+//! step would see it. The error is CIEDE2000 between that colour and the same stimulus at 1 nm by
+//! Simpson's rule, both in CIELAB relative to the light's white at 1 nm.
+
+use crate::colorimetry::{delta_e_2000, Cmfs, Lab, Observer, Xyz};
+use crate::data;
+use crate::error::{Error, Result};
+use crate::spectrum::{Interpolation, Rule, Spectrum, Tabulated, WavelengthGrid};
+use crate::thinfilm::{Coherence, Incidence, Polarization, Stack};
+use std::time::Instant;
+
+/// The steps `--tolerance` tries, coarsest first (those that divide the range).
+pub const STEPS_NM: [f64; 7] = [20.0, 10.0, 5.0, 4.0, 2.0, 1.0, 0.5];
+
+/// What a light falls on before it reaches the eye.
+// A scene has tens of stimuli: boxing the film would buy nothing.
+#[allow(clippy::large_enum_variant)]
+#[derive(Debug, Clone)]
+pub enum Surface {
+    /// Nothing: the light itself, seen directly.
+    Emitter,
+    /// A tabulated reflectance factor (smooth data).
+    Reflectance(Tabulated),
+    /// A thin-film stack, unpolarised light at an incidence angle.
+    Film {
+        stack: Stack,
+        incidence: Incidence,
+        coherence: Coherence,
+    },
+}
+
+/// A light and what it falls on.
+#[derive(Debug, Clone)]
+pub struct Stimulus {
+    pub name: String,
+    pub light: Tabulated,
+    pub surface: Surface,
+}
+
+impl Stimulus {
+    /// The light seen directly.
+    pub fn emitter(name: impl Into<String>, light: Tabulated) -> Stimulus {
+        Stimulus {
+            name: name.into(),
+            light,
+            surface: Surface::Emitter,
+        }
+    }
+
+    /// XYZ (Y = 100 for the light's perfect white) with everything sampled on the CMFs' grid.
+    pub fn xyz(&self, cmfs: &Cmfs, rule: Rule) -> Result<Xyz> {
+        let grid = cmfs.grid();
+        let light = self.light.resample(grid, Interpolation::LIGHT);
+        match &self.surface {
+            Surface::Emitter => cmfs.light_xyz(&light, rule),
+            Surface::Reflectance(r) => {
+                cmfs.reflectance_xyz(&r.resample(grid, Interpolation::SMOOTH), &light, rule)
+            }
+            Surface::Film {
+                stack,
+                incidence,
+                coherence,
+            } => {
+                let response = stack.response(
+                    grid,
+                    incidence,
+                    Polarization::Unpolarized,
+                    coherence.clone(),
+                )?;
+                let r = Spectrum::new(*grid, response.reflectance)?;
+                cmfs.reflectance_xyz(&r, &light, rule)
+            }
+        }
+        .map_err(|e| Error::invalid(format!("{}: {e}", self.name)))
+    }
+}
+
+/// The 24 ColorChecker patches (BabelColor averages) under a light, and the light itself.
+pub fn colorchecker_under(light_name: &str, light: &Tabulated) -> Result<Vec<Stimulus>> {
+    let table = data::Table::load("colorchecker")?;
+    let mut out = vec![Stimulus::emitter(light_name, light.clone())];
+    for (i, column) in table.columns().iter().enumerate() {
+        out.push(Stimulus {
+            name: format!("{column} under {light_name}"),
+            light: light.clone(),
+            surface: Surface::Reflectance(table.column_at(i)?),
+        });
+    }
+    Ok(out)
+}
+
+/// Colours of a set of stimuli at 1 nm by Simpson's rule: what every grid is compared with.
+pub struct Reference {
+    observer: Observer,
+    start_nm: f64,
+    end_nm: f64,
+    xyz: Vec<Xyz>,
+    white: Vec<Xyz>,
+}
+
+impl Reference {
+    /// Colours over `start..end` nm (whole nm) at 1 nm by Simpson's rule.
+    pub fn new(
+        stimuli: &[Stimulus],
+        observer: Observer,
+        start_nm: f64,
+        end_nm: f64,
+    ) -> Result<Self> {
+        let cmfs = Cmfs::new(observer, &WavelengthGrid::new(start_nm, end_nm, 1.0)?)?;
+        let mut xyz = Vec::with_capacity(stimuli.len());
+        let mut white = Vec::with_capacity(stimuli.len());
+        for s in stimuli {
+            xyz.push(s.xyz(&cmfs, Rule::Simpson)?);
+            white.push(cmfs.light_xyz(
+                &s.light.resample(cmfs.grid(), Interpolation::LIGHT),
+                Rule::Simpson,
+            )?);
+        }
+        Ok(Reference {
+            observer,
+            start_nm,
+            end_nm,
+            xyz,
+            white,
+        })
+    }
+
+    /// CIEDE2000 of each stimulus on `grid` by `rule` against the reference.
+    pub fn errors(
+        &self,
+        stimuli: &[Stimulus],
+        grid: &WavelengthGrid,
+        rule: Rule,
+    ) -> Result<Vec<f64>> {
+        if stimuli.len() != self.xyz.len() {
+            return Err(Error::invalid("the stimuli are not the reference's"));
+        }
+        let cmfs = Cmfs::new(self.observer, grid)?;
+        stimuli
+            .iter()
+            .zip(self.xyz.iter().zip(&self.white))
+            .map(|(s, (reference, white))| {
+                let x = s.xyz(&cmfs, rule)?;
+                Ok(delta_e_2000(
+                    Lab::from_xyz(x, *white),
+                    Lab::from_xyz(*reference, *white),
+                ))
+            })
+            .collect()
+    }
+
+    /// The grid with `step` over the reference's range, if the step divides it.
+    pub fn grid(&self, step_nm: f64) -> Option<WavelengthGrid> {
+        WavelengthGrid::new(self.start_nm, self.end_nm, step_nm).ok()
+    }
+}
+
+/// Error and time of one grid and rule on a set of stimuli.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Measurement {
+    pub step_nm: f64,
+    pub samples: usize,
+    pub rule: String,
+    #[serde(rename = "mean_dE2000")]
+    pub mean_de2000: f64,
+    #[serde(rename = "max_dE2000")]
+    pub max_de2000: f64,
+    /// The stimulus with the largest error.
+    pub worst: String,
+    /// Microseconds per stimulus colour (resampling, film evaluation and integration).
+    pub micros_per_colour: f64,
+}
+
+/// Measures one grid and rule: the errors, and the time per colour (repeated for at least
+/// `min_seconds`).
+pub fn measure(
+    reference: &Reference,
+    stimuli: &[Stimulus],
+    grid: &WavelengthGrid,
+    rule: Rule,
+    min_seconds: f64,
+) -> Result<Measurement> {
+    let errors = reference.errors(stimuli, grid, rule)?;
+    let (mut runs, t0) = (0usize, Instant::now());
+    loop {
+        let cmfs = Cmfs::new(reference.observer, grid)?;
+        for s in stimuli {
+            std::hint::black_box(s.xyz(&cmfs, rule)?);
+        }
+        runs += 1;
+        if t0.elapsed().as_secs_f64() >= min_seconds {
+            break;
+        }
+    }
+    let micros = t0.elapsed().as_secs_f64() * 1e6 / (runs * stimuli.len().max(1)) as f64;
+    let (worst, max) =
+        errors.iter().enumerate().fold(
+            (0, 0.0f64),
+            |(wi, wm), (i, &e)| if e > wm { (i, e) } else { (wi, wm) },
+        );
+    Ok(Measurement {
+        step_nm: grid.step_nm(),
+        samples: grid.len(),
+        rule: rule.to_string(),
+        mean_de2000: errors.iter().sum::<f64>() / errors.len().max(1) as f64,
+        max_de2000: max,
+        worst: stimuli
+            .get(worst)
+            .map(|s| s.name.clone())
+            .unwrap_or_default(),
+        micros_per_colour: micros,
+    })
+}
+
+/// What `--tolerance` chose.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct GridChoice {
+    /// The chosen grid, `start:end:step`.
+    pub grid: String,
+    pub step_nm: f64,
+    pub rule: String,
+    pub tolerance_de2000: f64,
+    /// The largest error over the scene's stimuli on the chosen grid (the estimate).
+    #[serde(rename = "max_dE2000")]
+    pub max_de2000: f64,
+    pub worst: String,
+    /// Whether some step met the tolerance (else the finest tried is chosen).
+    pub met: bool,
+    /// Every step tried, coarsest first, with its largest error.
+    pub tried: Vec<(f64, f64)>,
+    pub stimuli: usize,
+    #[serde(skip)]
+    pub chosen: WavelengthGrid,
+}
+
+/// The coarsest step of [`STEPS_NM`] (dividing `start..end`) whose largest error over
+/// `stimuli` is at most `tolerance`; the finest step if none is.
+pub fn choose_grid(
+    stimuli: &[Stimulus],
+    observer: Observer,
+    start_nm: f64,
+    end_nm: f64,
+    rule: Rule,
+    tolerance: f64,
+) -> Result<GridChoice> {
+    if !(tolerance.is_finite() && tolerance > 0.0) {
+        return Err(Error::invalid(format!(
+            "--tolerance {tolerance} must be a positive CIEDE2000 difference"
+        )));
+    }
+    if stimuli.is_empty() {
+        return Err(Error::invalid("no stimuli to choose a grid for"));
+    }
+    let reference = Reference::new(stimuli, observer, start_nm.ceil(), end_nm.floor())?;
+    let mut tried = Vec::new();
+    let mut last = None;
+    let mut failure = None;
+    for step in STEPS_NM {
+        let Some(grid) = WavelengthGrid::new(start_nm, end_nm, step).ok() else {
+            continue;
+        };
+        // A coarse grid can miss a line spectrum altogether (no energy): try a finer one.
+        let errors = match reference.errors(stimuli, &grid, rule) {
+            Ok(e) => e,
+            Err(e) => {
+                tried.push((step, f64::INFINITY));
+                failure = Some(e);
+                continue;
+            }
+        };
+        let (worst, max) =
+            errors.iter().enumerate().fold(
+                (0, 0.0f64),
+                |(wi, wm), (i, &e)| if e > wm { (i, e) } else { (wi, wm) },
+            );
+        tried.push((step, max));
+        let choice = GridChoice {
+            grid: grid.to_string(),
+            step_nm: step,
+            rule: rule.to_string(),
+            tolerance_de2000: tolerance,
+            max_de2000: max,
+            worst: stimuli[worst].name.clone(),
+            met: max <= tolerance,
+            tried: tried.clone(),
+            stimuli: stimuli.len(),
+            chosen: grid,
+        };
+        if choice.met {
+            return Ok(choice);
+        }
+        last = Some(choice);
+    }
+    match (last, failure) {
+        (Some(choice), _) => Ok(choice),
+        (None, Some(e)) => Err(e),
+        (None, None) => Err(Error::invalid(format!(
+            "no step of {STEPS_NM:?} nm divides the range {start_nm}..{end_nm} nm"
+        ))),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::thinfilm::{Layer, Material};
+
+    fn light(name: &str) -> Tabulated {
+        data::spectrum(name).unwrap().data
+    }
+
+    fn film(thickness_nm: f64) -> Stimulus {
+        let stack = Stack::new(
+            Material::constant(crate::thinfilm::Index::real(1.0).unwrap()),
+            vec![Layer::new(
+                Material::constant(crate::thinfilm::Index::real(1.5).unwrap()),
+                thickness_nm,
+            )
+            .unwrap()],
+            Material::constant(crate::thinfilm::Index::real(1.0).unwrap()),
+        );
+        Stimulus {
+            name: format!("{thickness_nm} nm film"),
+            light: light("D65"),
+            surface: Surface::Film {
+                stack,
+                incidence: Incidence::degrees(0.0).unwrap(),
+                coherence: Coherence::Coherent,
+            },
+        }
+    }
+
+    #[test]
+    fn the_reference_grid_has_no_error() {
+        let s = colorchecker_under("FL2", &light("FL2")).unwrap();
+        let r = Reference::new(&s, Observer::Cie1931, 380.0, 780.0).unwrap();
+        let e = r.errors(&s, &r.grid(1.0).unwrap(), Rule::Simpson).unwrap();
+        assert!(e.iter().all(|&x| x < 1e-9), "{e:?}");
+        assert_eq!(e.len(), 25);
+    }
+
+    #[test]
+    fn spiky_lights_need_finer_grids_than_smooth_ones() {
+        let pick = |name: &str| {
+            let s = colorchecker_under(name, &light(name)).unwrap();
+            choose_grid(&s, Observer::Cie1931, 380.0, 780.0, Rule::Riemann, 0.5).unwrap()
+        };
+        let (d65, fl2) = (pick("D65"), pick("FL2"));
+        assert!(d65.met && fl2.met);
+        assert!(
+            fl2.step_nm < d65.step_nm,
+            "FL2 {} vs D65 {}",
+            fl2.step_nm,
+            d65.step_nm
+        );
+        assert!(d65.max_de2000 <= 0.5 && fl2.max_de2000 <= 0.5);
+    }
+
+    #[test]
+    fn thick_films_need_finer_grids_than_thin_ones() {
+        let pick = |d: f64| {
+            choose_grid(
+                &[film(d)],
+                Observer::Cie1931,
+                380.0,
+                780.0,
+                Rule::Riemann,
+                0.5,
+            )
+            .unwrap()
+        };
+        let (thin, thick) = (pick(150.0), pick(3000.0));
+        assert!(
+            thick.step_nm < thin.step_nm,
+            "{} vs {}",
+            thick.step_nm,
+            thin.step_nm
+        );
+    }
+
+    #[test]
+    fn a_line_spectrum_missed_by_a_coarse_grid_is_tried_finer() {
+        // Low-pressure sodium's 589 nm doublet falls between the 20 nm samples: no energy.
+        let s = colorchecker_under("lps", &light("lps")).unwrap();
+        let c = choose_grid(&s, Observer::Cie1931, 380.0, 780.0, Rule::Riemann, 1.0).unwrap();
+        assert_eq!(c.tried[0], (20.0, f64::INFINITY));
+        assert!(c.step_nm < 20.0 && c.max_de2000.is_finite());
+    }
+
+    #[test]
+    fn a_bad_tolerance_is_an_error() {
+        let s = [Stimulus::emitter("D65", light("D65"))];
+        for t in [0.0, -1.0, f64::NAN] {
+            assert!(choose_grid(&s, Observer::Cie1931, 380.0, 780.0, Rule::Riemann, t).is_err());
+        }
+    }
+}
