@@ -52,7 +52,7 @@ pub fn run(a: ColorArgs) -> anyhow::Result<()> {
             };
             let (start, end) = (range.start_nm(), range.end_nm());
             let c = choose_grid(&[stimulus], observer, start, end, rule, tolerance)?;
-            range = c.chosen.clone();
+            range = c.chosen;
             Some(c)
         }
     };
