@@ -6,6 +6,7 @@
 //! - [`colorimetry`]: SPD -> XYZ (the paper's Eq. 10/11), RGB spaces, CIELAB, CIEDE2000, CCT;
 //! - [`fit`]: the paper's per-light basis weights, exact and non-negative modes, the round trip;
 //! - [`thinfilm`]: multilayer thin-film interference (paper Eq. 2-9 for N layers);
+//! - [`render`]: spectral preview renderer (Eq. 1 Phong + thin films), wgpu compute and CPU;
 //! - [`plot`], [`io`]: PNG/SVG plots and safe (temporary file + rename) output.
 
 pub mod colorimetry;
@@ -16,6 +17,7 @@ pub mod fit;
 pub mod illuminant;
 pub mod io;
 pub mod plot;
+pub mod render;
 pub mod spectrum;
 pub mod thinfilm;
 
