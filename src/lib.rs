@@ -7,6 +7,7 @@
 //! - [`fit`]: the paper's per-light basis weights, exact and non-negative modes, the round trip;
 //! - [`thinfilm`]: multilayer thin-film interference (paper Eq. 2-9 for N layers);
 //! - [`render`]: spectral preview renderer (Eq. 1 Phong + thin films), wgpu compute and CPU;
+//! - [`rendition`]: colour rendition of a spectral map against its truth (patches, CAT02, CIEDE2000);
 //! - [`plot`], [`io`]: PNG/SVG plots and safe (temporary file + rename) output.
 
 pub mod colorimetry;
@@ -18,6 +19,7 @@ pub mod illuminant;
 pub mod io;
 pub mod plot;
 pub mod render;
+pub mod rendition;
 pub mod spectrum;
 pub mod thinfilm;
 

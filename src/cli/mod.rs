@@ -5,6 +5,7 @@ mod convert;
 mod data;
 mod fit;
 mod render;
+mod rendition;
 mod roundtrip;
 mod thinfilm;
 
@@ -29,6 +30,7 @@ Examples:
   specmap color my_lamp.csv
   specmap convert envmaps/sunrise.exr -o sunrise.spectral.exr --light auto
   specmap fit --light FL2 --mode exact -o fit.json --plot basis.png
+  specmap rendition truth.spectral.exr converted.exr --normals up,px,nx,pz,nz
   specmap thinfilm --layers 2.7:270 --substrate 1.45 --json
   specmap render --scene ball --env envmaps/sunrise.exr -o ball.png
 
@@ -56,6 +58,8 @@ enum Command {
     Fit(fit::FitArgs),
     /// Spectral preview render (Eq. 1 Phong, thin films) of the paper's scenes, GPU or CPU.
     Render(Box<render::RenderArgs>),
+    /// Colour rendition: ColorChecker patches lit by a spectral map and by its truth (CIEDE2000).
+    Rendition(rendition::RenditionArgs),
     /// Integrate a spectral EXR back to RGB and compare with its RGB preview (CIEDE2000).
     Roundtrip(roundtrip::RoundtripArgs),
     /// Multilayer thin film: R and T spectra (paper Eq. 2-9, N layers) and the reflected colour.
@@ -69,6 +73,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Convert(a) => convert::run(*a),
         Command::Fit(a) => fit::run(a),
         Command::Render(a) => render::run(*a),
+        Command::Rendition(a) => rendition::run(a),
         Command::Roundtrip(a) => roundtrip::run(a),
         Command::Thinfilm(a) => thinfilm::run(a),
     }
