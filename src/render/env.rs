@@ -594,3 +594,40 @@ fn load_spectral(path: &Path, light: &str) -> Result<(Lighting, EnvReport)> {
     };
     Ok((lit, report))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn texel_centres_sample_to_themselves_and_solid_angles_tile_the_sphere() {
+        let (w, h) = (16, 8);
+        let m = CoeffMap {
+            width: w,
+            height: h,
+            texels: (0..w * h).map(|i| [i as f32, 0.0, 0.0, 1.0]).collect(),
+        };
+        for y in 0..h {
+            for x in 0..w {
+                let v = m.sample(direction(w, h, x, y));
+                assert!((v[0] - (y * w + x) as f64).abs() < 1e-6, "({x},{y}) {v:?}");
+                assert!((v[3] - 1.0).abs() < 1e-12);
+            }
+        }
+        let total: f64 = (0..h).map(|y| w as f64 * solid_angle(w, h, y)).sum();
+        assert!((total - 4.0 * PI).abs() < 1e-12);
+    }
+
+    #[test]
+    fn prefiltering_keeps_a_constant_environment_constant() {
+        let env = Environment::SkyGround {
+            sky: 0.7,
+            ground: 0.7,
+            blend_deg: 10.0,
+        };
+        let f = prefilter(&env, &[0.0, 50.0]);
+        for m in std::iter::once(&f.diffuse).chain(f.specular.iter().map(|(_, m)| m)) {
+            assert!(m.texels.iter().all(|t| (t[3] - 0.7).abs() < 1e-5));
+        }
+    }
+}
