@@ -6,6 +6,8 @@
 //! - [`colorimetry`]: SPD -> XYZ (the paper's Eq. 10/11), RGB spaces, CIELAB, CIEDE2000, CCT;
 //! - [`fit`]: the paper's per-light basis weights, exact and non-negative modes, the round trip;
 //! - [`thinfilm`]: multilayer thin-film interference (paper Eq. 2-9 for N layers);
+//! - [`render`]: spectral preview renderer (Eq. 1 Phong + thin films), wgpu compute and CPU;
+//! - [`rendition`]: colour rendition of a spectral map against its truth (patches, CAT02, CIEDE2000);
 //! - [`tradeoff`]: colour error against time for wavelength grids and rules; `--tolerance`;
 //! - [`plot`], [`io`]: PNG/SVG plots and safe (temporary file + rename) output.
 
@@ -17,6 +19,8 @@ pub mod fit;
 pub mod illuminant;
 pub mod io;
 pub mod plot;
+pub mod render;
+pub mod rendition;
 pub mod spectrum;
 pub mod thinfilm;
 pub mod tradeoff;

@@ -4,6 +4,8 @@ mod color;
 mod convert;
 mod data;
 mod fit;
+mod render;
+mod rendition;
 mod roundtrip;
 mod thinfilm;
 
@@ -28,7 +30,9 @@ Examples:
   specmap color my_lamp.csv
   specmap convert envmaps/sunrise.exr -o sunrise.spectral.exr --light auto
   specmap fit --light FL2 --mode exact -o fit.json --plot basis.png
+  specmap rendition truth.spectral.exr converted.exr --normals up,px,nx,pz,nz
   specmap thinfilm --layers 2.7:270 --substrate 1.45 --json
+  specmap render --scene ball --env envmaps/sunrise.exr -o ball.png
 
 A spectrum is a built-in table name (see `specmap data list`), TABLE:COLUMN
 (e.g. colorchecker:red) or a CSV file with the header `wavelength_nm,<column>,...`.";
@@ -52,6 +56,10 @@ enum Command {
     Convert(Box<convert::ConvertArgs>),
     /// Fit the paper's basis weights w_R, w_G, w_B for a main light; exact and non-negative modes.
     Fit(fit::FitArgs),
+    /// Spectral preview render (Eq. 1 Phong, thin films) of the paper's scenes, GPU or CPU.
+    Render(Box<render::RenderArgs>),
+    /// Colour rendition: ColorChecker patches lit by a spectral map and by its truth (CIEDE2000).
+    Rendition(rendition::RenditionArgs),
     /// Integrate a spectral EXR back to RGB and compare with its RGB preview (CIEDE2000).
     Roundtrip(roundtrip::RoundtripArgs),
     /// Multilayer thin film: R and T spectra (paper Eq. 2-9, N layers) and the reflected colour.
@@ -64,6 +72,8 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Color(a) => color::run(a),
         Command::Convert(a) => convert::run(*a),
         Command::Fit(a) => fit::run(a),
+        Command::Render(a) => render::run(*a),
+        Command::Rendition(a) => rendition::run(a),
         Command::Roundtrip(a) => roundtrip::run(a),
         Command::Thinfilm(a) => thinfilm::run(a),
     }

@@ -1,0 +1,405 @@
+//! `specmap render`: a spectral preview of the paper's scenes (Eq. 1 Phong, Eq. 2-9 films) on
+//! the GPU or the CPU, and the speed-for-accuracy sweep.
+
+use super::outln;
+use super::{ObserverArg, RuleArg};
+use anyhow::Context;
+use clap::{Args, ValueEnum};
+use specmap::colorimetry::RgbSpace;
+use specmap::render::gpu::Gpu;
+use specmap::render::prepare::Prepared;
+use specmap::render::{cpu, env, sweep, Backend, Film, Preset, Spectral};
+use specmap::spectrum::Tabulated;
+use specmap::thinfilm::{Index, Layer, Material};
+use std::path::PathBuf;
+use std::time::Instant;
+
+#[derive(Debug, Args)]
+#[command(after_help = "\
+Without --env the scene is lit by a uniform LIGHT and a key light of the same SPD
+(transparent-ball: a bright sky over a dark floor). --film/--substrate/--diffuse/--kd/--ks/
+--shininess change the scene's main objects (the chart's spheres).
+
+Examples:
+  specmap render --scene ball -o ball.png
+  specmap render --scene ball --env envmaps/sunrise.exr --samples 81 -o ball.exr
+  specmap render --scene cylinders --backend cpu --step 5 --json
+  specmap render --scene chart --size 768x512 --exposure -0.5 -o chart.png
+  specmap render --scene ball --film 1.38:100,2.1:130 --substrate bk7 -o coated.png
+  specmap render --scene chart --size 384x256 --sweep 4,9,17,34,81,340 --sweep-out sweep/")]
+pub struct RenderArgs {
+    /// The scene preset (the paper's figures 6-9).
+    #[arg(long, value_enum, default_value_t = SceneArg::Ball)]
+    scene: SceneArg,
+    /// Environment map: an RGB EXR/HDR (converted on the fly), or a basis or spectral EXR from
+    /// `specmap convert`.
+    #[arg(long, value_name = "MAP")]
+    env: Option<PathBuf>,
+    /// Main light: the uniform light without --env, the conversion's light with an RGB map.
+    #[arg(long, value_name = "LIGHT", default_value = "D65")]
+    light: String,
+    /// Film layers from the air side, INDEX:THICKNESS_NM[,...] (e.g. 2.7:270).
+    #[arg(long, value_name = "N:D[,N:D...]")]
+    film: Option<String>,
+    /// Substrate index under the film (e.g. 1.45, bk7, 3.1+3.3i).
+    #[arg(long, value_name = "N")]
+    substrate: Option<String>,
+    /// Pigment reflectance R_d: TABLE:COLUMN, a CSV, or a constant (e.g. 0.5).
+    #[arg(long, value_name = "T:C|CSV")]
+    diffuse: Option<String>,
+    /// Diffuse coefficient k_d.
+    #[arg(long)]
+    kd: Option<f64>,
+    /// Specular coefficient k_s (without a film).
+    #[arg(long)]
+    ks: Option<f64>,
+    /// Phong exponent n.
+    #[arg(long)]
+    shininess: Option<f64>,
+    /// Image size WxH (default: the preset's).
+    #[arg(long, value_name = "WxH")]
+    size: Option<String>,
+    /// Wavelength step in nm over 380..780 (must divide 400).
+    #[arg(long, value_name = "NM", conflicts_with = "samples")]
+    step: Option<f64>,
+    /// Number of wavelengths over 380..780 nm (default 81: 5 nm).
+    #[arg(long, value_name = "N")]
+    samples: Option<usize>,
+    /// Integration rule of the colour integrals.
+    #[arg(long, value_enum, default_value_t = RuleArg::Riemann)]
+    rule: RuleArg,
+    /// Standard observer.
+    #[arg(long, value_enum, default_value_t = ObserverArg::Cie1931)]
+    observer: ObserverArg,
+    /// Which renderer: the GPU if an adapter exists (auto), or one of them.
+    #[arg(long, value_enum, default_value_t = BackendArg::Auto)]
+    backend: BackendArg,
+    /// Exposure in stops applied to the written image.
+    #[arg(
+        long,
+        value_name = "EV",
+        default_value_t = 0.0,
+        allow_hyphen_values = true
+    )]
+    exposure: f64,
+    /// Output image: .png (8-bit sRGB) or .exr (linear float).
+    #[arg(short = 'o', long = "output", value_name = "OUT")]
+    output: Option<PathBuf>,
+    /// Machine-readable report on stdout.
+    #[arg(long)]
+    json: bool,
+    /// Instead of one image: the speed-for-accuracy curve at these wavelength counts.
+    #[arg(long, value_name = "N,N,...", value_delimiter = ',')]
+    sweep: Option<Vec<usize>>,
+    /// Folder for the sweep's sweep.md, sweep.json and sweep.png.
+    #[arg(long, value_name = "DIR", requires = "sweep")]
+    sweep_out: Option<PathBuf>,
+    /// Frames per wavelength count in the sweep (the fastest is kept).
+    #[arg(long, value_name = "N", default_value_t = 3)]
+    repeats: usize,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum SceneArg {
+    /// Fig. 6: chrome-oxide film 270 nm (n 2.7) on black plastic (1.45)
+    Ball,
+    /// Fig. 7: TiO2 (2.3) on clear plastic (1.45), 150 nm and 350 nm
+    TransparentBall,
+    /// Fig. 8: chrome oxide, thickness rising from 100 nm (left) to 400 nm (right)
+    Cylinders,
+    /// Fig. 9: ColorChecker and plastic spheres under D65, A and low-pressure sodium
+    Chart,
+}
+
+impl From<SceneArg> for Preset {
+    fn from(s: SceneArg) -> Self {
+        match s {
+            SceneArg::Ball => Preset::Ball,
+            SceneArg::TransparentBall => Preset::TransparentBall,
+            SceneArg::Cylinders => Preset::Cylinders,
+            SceneArg::Chart => Preset::Chart,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum BackendArg {
+    /// the GPU when an adapter exists, else the CPU (with a one-line notice)
+    Auto,
+    /// wgpu compute; an error without an adapter
+    Gpu,
+    /// the rayon reference renderer
+    Cpu,
+}
+
+fn index(spec: &str, what: &str) -> anyhow::Result<Material> {
+    let s = spec.trim();
+    if let Some(m) = Material::named(s) {
+        return Ok(m);
+    }
+    let i: Index = s.parse().with_context(|| {
+        format!("{what} '{spec}' is not an index (2.7, 3.1+3.3i) or a named material (bk7)")
+    })?;
+    Ok(Material::constant(i))
+}
+
+fn film_layers(spec: &str) -> anyhow::Result<Vec<Layer>> {
+    spec.split(',')
+        .filter(|p| !p.trim().is_empty())
+        .enumerate()
+        .map(|(i, part)| {
+            let n = i + 1;
+            let (m, d) = part.trim().rsplit_once(':').with_context(|| {
+                format!("film layer {n}: '{part}' must be INDEX:THICKNESS_NM, e.g. 2.7:270")
+            })?;
+            let d: f64 = d.trim().parse().map_err(|_| {
+                anyhow::anyhow!("film layer {n}: thickness '{d}' is not a number (nm)")
+            })?;
+            Ok(Layer::new(index(m, &format!("film layer {n}"))?, d)?)
+        })
+        .collect()
+}
+
+fn size(spec: &str) -> anyhow::Result<(usize, usize)> {
+    let (w, h) = spec
+        .split_once(['x', 'X'])
+        .with_context(|| format!("--size '{spec}' must be WxH, e.g. 512x512"))?;
+    let p = |v: &str| -> anyhow::Result<usize> {
+        v.trim()
+            .parse()
+            .map_err(|_| anyhow::anyhow!("--size '{spec}': '{v}' is not a whole number"))
+    };
+    Ok((p(w)?, p(h)?))
+}
+
+fn diffuse(spec: &str) -> anyhow::Result<Tabulated> {
+    if let Ok(v) = spec.trim().parse::<f64>() {
+        if !(0.0..=1.0).contains(&v) {
+            anyhow::bail!("--diffuse {v}: a constant reflectance must be between 0 and 1");
+        }
+        return Ok(Tabulated::new(vec![380.0, 780.0], vec![v, v])?);
+    }
+    Ok(specmap::data::spectrum(spec)?.data)
+}
+
+pub fn run(a: RenderArgs) -> anyhow::Result<()> {
+    let preset = Preset::from(a.scene);
+    let (w, h) = match &a.size {
+        Some(s) => size(s)?,
+        None => preset.default_size(),
+    };
+    if preset == Preset::Chart && (a.env.is_some() || a.light != "D65") {
+        anyhow::bail!("the chart compares D65, A and low-pressure sodium side by side; --env and --light do not apply to it");
+    }
+    let (lighting, env_report) = match &a.env {
+        Some(p) => {
+            let (l, r) = env::load(p, &a.light)
+                .with_context(|| format!("loading the environment {}", p.display()))?;
+            (Some(l), Some(r))
+        }
+        None => (None, None),
+    };
+    let mut scene = preset.scene(w, h, &a.light, lighting)?;
+    // Surface flags on the main objects.
+    let layers = a.film.as_deref().map(film_layers).transpose()?;
+    let substrate = a
+        .substrate
+        .as_deref()
+        .map(|s| index(s, "substrate"))
+        .transpose()?;
+    let rd = a.diffuse.as_deref().map(diffuse).transpose()?;
+    for o in scene.objects.iter_mut().filter(|o| o.main) {
+        let s = &mut o.surface;
+        if layers.is_some() || substrate.is_some() {
+            let f = s.film.get_or_insert(Film {
+                ambient: Material::constant(Index::real(1.0)?),
+                layers: Vec::new(),
+                substrate: Material::constant(Index::real(1.5)?),
+            });
+            if let Some(l) = &layers {
+                f.layers = l.clone();
+                o.ramp = None;
+            }
+            if let Some(m) = &substrate {
+                f.substrate = m.clone();
+            }
+        }
+        if let Some(r) = &rd {
+            s.diffuse = Some(r.clone());
+        }
+        if let Some(v) = a.kd {
+            s.kd = v;
+        }
+        if let Some(v) = a.ks {
+            s.ks = v;
+        }
+        if let Some(v) = a.shininess {
+            s.shininess = v;
+        }
+    }
+    let base = match (a.step, a.samples) {
+        (Some(s), _) => Spectral::step(s)?,
+        (None, Some(n)) => Spectral::samples(n)?,
+        (None, None) => Spectral::default(),
+    };
+    let spectral = Spectral {
+        rule: a.rule.into(),
+        observer: a.observer.into(),
+        space: RgbSpace::SRGB,
+        ..base
+    };
+
+    // The backend.
+    let gpu = match a.backend {
+        BackendArg::Cpu => None,
+        BackendArg::Gpu => Some(Gpu::new().context("--backend gpu")?),
+        BackendArg::Auto => match Gpu::new() {
+            Ok(g) => Some(g),
+            Err(e) => {
+                let first = e.to_string();
+                let first = first.lines().next().unwrap_or_default().to_string();
+                eprintln!("note: falling back to the CPU renderer: {first}");
+                None
+            }
+        },
+    };
+    let backend = if gpu.is_some() {
+        Backend::Gpu
+    } else {
+        Backend::Cpu
+    };
+    let adapter = gpu.as_ref().map(|g| g.adapter());
+
+    if let Some(counts) = &a.sweep {
+        if counts.is_empty() {
+            anyhow::bail!("--sweep needs wavelength counts, e.g. 4,9,17,34,81,340");
+        }
+        let mut reports = vec![sweep::sweep(
+            &scene,
+            &spectral,
+            counts,
+            backend,
+            gpu.as_ref(),
+            a.repeats,
+        )?];
+        if backend == Backend::Gpu && a.backend == BackendArg::Auto {
+            // Auto with a GPU: measure the CPU too, for the comparison.
+            reports.push(sweep::sweep(
+                &scene,
+                &spectral,
+                counts,
+                Backend::Cpu,
+                None,
+                a.repeats,
+            )?);
+        }
+        let table = sweep::markdown(&reports);
+        if let Some(dir) = &a.sweep_out {
+            std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+            specmap::io::write_atomic(&dir.join("sweep.md"), table.as_bytes())?;
+            specmap::io::write_atomic(
+                &dir.join("sweep.json"),
+                (serde_json::to_string_pretty(&reports)? + "\n").as_bytes(),
+            )?;
+            sweep::plot(&reports, &dir.join("sweep.png")).context("writing the sweep plot")?;
+            eprintln!("wrote {}/sweep.md, sweep.json, sweep.png", dir.display());
+        }
+        if a.json {
+            super::emit(&(serde_json::to_string_pretty(&reports)? + "\n"));
+        } else {
+            let mut out = String::new();
+            outln!(
+                out,
+                "speed for accuracy: {} {}x{}, colour error against the 1 nm render of the same backend",
+                scene.name,
+                scene.width,
+                scene.height
+            );
+            out.push_str(&table);
+            super::emit(&out);
+        }
+        return Ok(());
+    }
+
+    let t0 = Instant::now();
+    let prepared = Prepared::new(&scene, &spectral)?;
+    let prepare_s = t0.elapsed().as_secs_f64();
+    let t1 = Instant::now();
+    let (image, gpu_timing) = match &gpu {
+        Some(g) => {
+            let (i, t) = g.render(&prepared)?;
+            (i, Some(t))
+        }
+        None => (cpu::render(&prepared), None),
+    };
+    let render_s = t1.elapsed().as_secs_f64();
+    let output = a
+        .output
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(format!("render-{}.png", preset.name())));
+    image
+        .write(&output, a.exposure)
+        .with_context(|| format!("writing {}", output.display()))?;
+
+    if a.json {
+        let doc = serde_json::json!({
+            "scene": preset.name(),
+            "size": [w, h],
+            "backend": backend,
+            "adapter": adapter,
+            "wavelengths": spectral.grid.len(),
+            "range": spectral.grid.to_string(),
+            "rule": spectral.rule,
+            "light": scene.lightings.iter().map(|l| l.label.clone()).collect::<Vec<_>>(),
+            "env": env_report,
+            "prepare_s": prepare_s,
+            "render_s": render_s,
+            "gpu_timing": gpu_timing,
+            "exposure_ev": a.exposure,
+            "output": output.display().to_string(),
+        });
+        super::emit(&(serde_json::to_string_pretty(&doc)? + "\n"));
+        return Ok(());
+    }
+    let mut out = String::new();
+    outln!(
+        out,
+        "rendered {} {w}x{h}, {} wavelengths ({} nm, {} rule) on the {backend}{}",
+        preset.name(),
+        spectral.grid.len(),
+        spectral.grid,
+        spectral.rule,
+        adapter
+            .as_ref()
+            .map(|a| format!(" ({}, {})", a.name, a.backend))
+            .unwrap_or_default()
+    );
+    if let Some(r) = &env_report {
+        outln!(
+            out,
+            "  environment {} ({}), main light {}, sun {}",
+            r.file,
+            r.kind,
+            r.light,
+            match r.sun_direction {
+                Some(d) => format!(
+                    "at ({:.3}, {:.3}, {:.3}) as a directional light",
+                    d[0], d[1], d[2]
+                ),
+                None => "not found".into(),
+            }
+        );
+    }
+    outln!(
+        out,
+        "  prepare {:.1} ms, render {:.1} ms{}",
+        prepare_s * 1e3,
+        render_s * 1e3,
+        gpu_timing
+            .map(|t| format!(" (GPU compute {:.1} ms)", t.compute_s * 1e3))
+            .unwrap_or_default()
+    );
+    outln!(out, "wrote {}", output.display());
+    super::emit(&out);
+    Ok(())
+}

@@ -1,0 +1,211 @@
+//! The CPU reference renderer: the same model as `gpu.wgsl`, in f64, rows in parallel (rayon),
+//! films by the thin-film module itself ([`crate::thinfilm::Film`]).
+
+use super::env;
+use super::prepare::{
+    CpuFilm, GpuObject, Prepared, CYLINDER_X, HAS_DIFFUSE, HAS_FILM, QUAD, SPHERE, TRANSPARENT,
+};
+use super::Image;
+use crate::thinfilm::{Film, Incidence, Polarization};
+use rayon::prelude::*;
+use std::f64::consts::PI;
+
+/// Renders the prepared scene.
+pub fn render(p: &Prepared) -> Image {
+    let (w, h) = (p.params.width as usize, p.params.height as usize);
+    let mut pixels = vec![[0f32; 3]; w * h];
+    pixels.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+        for (x, out) in row.iter_mut().enumerate() {
+            *out = pixel(p, x, y);
+        }
+    });
+    Image {
+        width: w,
+        height: h,
+        pixels,
+    }
+}
+
+/// The world position on the image plane of pixel (x, y)'s centre.
+pub fn pixel_position(p: &Prepared, x: usize, y: usize) -> [f64; 2] {
+    let v = p.params.view.map(|c| c as f64);
+    let (w, h) = (p.params.width as f64, p.params.height as f64);
+    [
+        v[0] + (x as f64 + 0.5 - 0.5 * w) * v[2],
+        v[1] - (y as f64 + 0.5 - 0.5 * h) * v[2],
+    ]
+}
+
+/// The nearest hit along the ray down −Z through (px, py): object index, normal.
+pub fn hit(objects: &[GpuObject], px: f64, py: f64) -> Option<(usize, [f64; 3])> {
+    let mut best: Option<(usize, [f64; 3])> = None;
+    let mut best_z = f64::NEG_INFINITY;
+    for (i, o) in objects.iter().enumerate() {
+        let p0 = o.p0.map(|v| v as f64);
+        let p1 = o.p1.map(|v| v as f64);
+        let found = match o.kind {
+            SPHERE => {
+                let (dx, dy, r) = (px - p0[0], py - p0[1], p0[3]);
+                let q = r * r - dx * dx - dy * dy;
+                (q >= 0.0).then(|| {
+                    let s = q.sqrt();
+                    (p0[2] + s, [dx / r, dy / r, s / r])
+                })
+            }
+            CYLINDER_X => {
+                let (dy, r) = (py - p0[1], p0[3]);
+                let q = r * r - dy * dy;
+                ((px - p0[0]).abs() <= p1[0] && q >= 0.0).then(|| {
+                    let s = q.sqrt();
+                    (p0[2] + s, [0.0, dy / r, s / r])
+                })
+            }
+            QUAD => ((px - p0[0]).abs() <= p1[0] && (py - p0[1]).abs() <= p1[1])
+                .then_some((p0[2], [0.0, 0.0, 1.0])),
+            _ => None,
+        };
+        if let Some((z, n)) = found {
+            if z > best_z {
+                best_z = z;
+                best = Some((i, n));
+            }
+        }
+    }
+    best.map(|(i, n)| {
+        let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        (i, n.map(|c| c / len))
+    })
+}
+
+fn map_sample(p: &Prepared, map: u32, dir: [f64; 3]) -> [f64; 4] {
+    let [off, w, h, _] = p.maps[map as usize];
+    let off = off as usize;
+    let (w, h) = (w as usize, h as usize);
+    env::sample(&p.texels[off..off + w * h], w, h, dir)
+}
+
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// `max(c, 0)^n`, 0 where `c <= 0` (also for n = 0).
+pub fn lobe(c: f64, n: f64) -> f64 {
+    if c > 0.0 {
+        c.powf(n)
+    } else {
+        0.0
+    }
+}
+
+/// Film R and T at `cos_v` and wavelength index `i`, thicknesses scaled by `scale`.
+fn film_rt(f: &CpuFilm, i: usize, cos_v: f64, scale: Option<f64>) -> (f64, f64) {
+    let deg = cos_v.clamp(0.0, 1.0).acos().to_degrees().clamp(0.0, 90.0);
+    let inc = Incidence::degrees(deg).unwrap_or(Incidence::NORMAL);
+    let rt = match scale {
+        None => f.films[i].rt(&inc, Polarization::Unpolarized),
+        Some(s) => {
+            let (a, layers, sub) = &f.indices[i];
+            let l: Vec<_> = layers
+                .iter()
+                .zip(&f.thickness_nm)
+                .map(|(n, d)| (*n, d * s))
+                .collect();
+            match Film::<f64>::new(f.films[i].wavelength_nm(), *a, &l, *sub) {
+                Ok(film) => film.rt(&inc, Polarization::Unpolarized),
+                Err(_) => return (0.0, 0.0),
+            }
+        }
+    };
+    (rt.r, rt.t)
+}
+
+fn pixel(p: &Prepared, x: usize, y: usize) -> [f32; 3] {
+    let n_wl = p.params.n_wl as usize;
+    let sp = |off: u32, i: usize| p.spectra[off as usize + i] as f64;
+    let d = [0.0, 0.0, -1.0];
+    let mut xyz = [0.0f64; 3];
+    let cmf = p.params.cmf_offset as usize;
+    let mut add = |i: usize, l: f64| {
+        for (c, v) in xyz.iter_mut().enumerate() {
+            *v += p.spectra[cmf + c * n_wl + i] as f64 * l;
+        }
+    };
+    let [px, py] = pixel_position(p, x, y);
+    match hit(&p.objects, px, py) {
+        None => {
+            let lt = &p.lightings[p.params.background as usize];
+            let c = map_sample(p, lt.background_map, d);
+            for i in 0..n_wl {
+                let l: f64 = (0..4).map(|j| c[j] * sp(lt.spectra, j * n_wl + i)).sum();
+                add(i, l);
+            }
+        }
+        Some((oi, n)) => {
+            let o = &p.objects[oi];
+            let m = &p.materials[o.material as usize];
+            let lt = &p.lightings[o.lighting as usize];
+            let cos_v = n[2].clamp(0.0, 1.0);
+            let rv = [
+                2.0 * n[2] * n[0],
+                2.0 * n[2] * n[1],
+                2.0 * n[2] * n[2] - 1.0,
+            ];
+            let [kd, ks, shininess, _] = m.coef.map(|v| v as f64);
+            let transparent = m.flags & TRANSPARENT != 0;
+            let cd = map_sample(p, lt.diffuse_map, n);
+            let cs = map_sample(p, o.spec_map, rv);
+            let ct = if transparent {
+                map_sample(p, lt.background_map, d)
+            } else {
+                [0.0; 4]
+            };
+            let (sun_d, sun_s) = if lt.has_sun != 0 {
+                let s = lt.sun.map(|v| v as f64);
+                let l = [s[0], s[1], s[2]];
+                (
+                    s[3] * dot(n, l).max(0.0) / PI,
+                    s[3] * (shininess + 1.0) / (2.0 * PI) * lobe(dot(rv, l), shininess),
+                )
+            } else {
+                (0.0, 0.0)
+            };
+            let film = (m.flags & HAS_FILM != 0)
+                .then(|| p.films[o.material as usize].as_ref())
+                .flatten();
+            let scale = (o.flags[0] != 0).then(|| {
+                let r = o.ramp.map(|v| v as f64);
+                let t = if r[1] == r[0] {
+                    0.0
+                } else {
+                    ((px - r[0]) / (r[1] - r[0])).clamp(0.0, 1.0)
+                };
+                r[2] + (r[3] - r[2]) * t
+            });
+            for i in 0..n_wl {
+                let s = [0, 1, 2, 3].map(|j| sp(lt.spectra, j * n_wl + i));
+                let ld: f64 = (0..4).map(|j| cd[j] * s[j]).sum::<f64>() + sun_d * s[3];
+                let ls: f64 = (0..4).map(|j| cs[j] * s[j]).sum::<f64>() + sun_s * s[3];
+                let (fr, ft) = match film {
+                    Some(f) => film_rt(f, i, cos_v, scale),
+                    None => (ks, 1.0),
+                };
+                let l = if transparent {
+                    let lt_: f64 = (0..4).map(|j| ct[j] * s[j]).sum();
+                    fr * ls + ft * lt_
+                } else {
+                    let rd = if m.flags & HAS_DIFFUSE != 0 {
+                        sp(m.diffuse_offset, i)
+                    } else {
+                        0.0
+                    };
+                    kd * rd * ft * ld + fr * ls
+                };
+                add(i, l);
+            }
+        }
+    }
+    let rgb = p.params.rgb;
+    [0, 1, 2].map(|r| {
+        (rgb[r][0] as f64 * xyz[0] + rgb[r][1] as f64 * xyz[1] + rgb[r][2] as f64 * xyz[2]) as f32
+    })
+}

@@ -1,0 +1,633 @@
+//! Environment light in coefficient space: lat-long maps of `(c_R, c_G, c_B, s)`, the sun taken
+//! out as a directional light, the diffuse and specular pre-filtering both renderers sample, and
+//! loading maps from RGB, `basis` and spectral OpenEXR files.
+//!
+//! Maps are lat-long in OpenEXR's orientation ([`crate::envmap::layout`]): texel `(x, y)` looks
+//! at longitude `-2 pi ((x + 0.5) / w - 0.5)` and latitude `pi / 2 - pi (y + 0.5) / h`. Lookups
+//! are bilinear, wrapping in longitude and clamped in latitude; `sample` here and `sample_map` in
+//! `gpu.wgsl` are the same function.
+
+use super::{Environment, Lighting, Sun};
+use crate::colorimetry::{Observer, RgbSpace};
+use crate::envmap::exrio::{self, AttrValue, EnvmapAttr};
+use crate::envmap::layout::{detect, EnvMap, Layout};
+use crate::envmap::sun::{find_sun, SunSettings};
+use crate::envmap::RgbImage;
+use crate::error::{Error, Result};
+use crate::fit::{self, FitInput, Mode, Upsampler};
+use crate::spectrum::{Rule, Tabulated, WavelengthGrid};
+use rayon::prelude::*;
+use std::f64::consts::PI;
+use std::path::Path;
+use std::sync::Arc;
+
+/// Rows of the lat-long a file map is resampled to before filtering.
+pub const SOURCE_ROWS: usize = 64;
+/// Rows of the diffuse irradiance map.
+pub const DIFFUSE_ROWS: usize = 16;
+/// Rows of each specular map.
+pub const SPECULAR_ROWS: usize = 32;
+
+/// A lat-long map of four coefficients per texel.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CoeffMap {
+    pub width: usize,
+    pub height: usize,
+    pub texels: Vec<[f32; 4]>,
+}
+
+impl CoeffMap {
+    /// The same value everywhere (1 x 1).
+    pub fn constant(c: [f32; 4]) -> CoeffMap {
+        CoeffMap {
+            width: 1,
+            height: 1,
+            texels: vec![c],
+        }
+    }
+
+    /// A `2 rows x rows` map computed per texel direction.
+    pub fn from_fn(rows: usize, f: impl Fn([f64; 3]) -> [f32; 4] + Sync) -> CoeffMap {
+        let (w, h) = (2 * rows, rows);
+        let texels = (0..w * h)
+            .into_par_iter()
+            .map(|i| f(direction(w, h, i % w, i / w)))
+            .collect();
+        CoeffMap {
+            width: w,
+            height: h,
+            texels,
+        }
+    }
+
+    /// Bilinear lookup in direction `dir` (unit).
+    pub fn sample(&self, dir: [f64; 3]) -> [f64; 4] {
+        sample(&self.texels, self.width, self.height, dir)
+    }
+}
+
+/// The unit direction of texel (x, y) of a `w x h` lat-long.
+pub fn direction(w: usize, h: usize, x: usize, y: usize) -> [f64; 3] {
+    let lon = -2.0 * PI * ((x as f64 + 0.5) / w as f64 - 0.5);
+    let lat = PI / 2.0 - PI * (y as f64 + 0.5) / h as f64;
+    [lon.sin() * lat.cos(), lat.sin(), lon.cos() * lat.cos()]
+}
+
+/// The solid angle of a texel in row `y` of a `w x h` lat-long.
+pub fn solid_angle(w: usize, h: usize, y: usize) -> f64 {
+    let t0 = PI * y as f64 / h as f64;
+    let t1 = PI * (y + 1) as f64 / h as f64;
+    2.0 * PI / w as f64 * (t0.cos() - t1.cos())
+}
+
+/// Bilinear lookup of a `w x h` lat-long stored row-major in `texels`.
+pub fn sample(texels: &[[f32; 4]], w: usize, h: usize, dir: [f64; 3]) -> [f64; 4] {
+    let u = 0.5 - dir[0].atan2(dir[2]) / (2.0 * PI);
+    let v = dir[1].clamp(-1.0, 1.0).acos() / PI;
+    let fx = u * w as f64 - 0.5;
+    let fy = (v * h as f64 - 0.5).clamp(0.0, (h - 1) as f64);
+    let x0f = fx.floor();
+    let tx = fx - x0f;
+    let y0f = fy.floor();
+    let ty = fy - y0f;
+    let wi = w as i64;
+    let x0 = (x0f as i64).rem_euclid(wi) as usize;
+    let x1 = (x0 + 1) % w;
+    let y0 = y0f as usize;
+    let y1 = (y0 + 1).min(h - 1);
+    let t = |x: usize, y: usize| texels[y * w + x];
+    let (a, b, c, d) = (t(x0, y0), t(x1, y0), t(x0, y1), t(x1, y1));
+    let mut out = [0.0; 4];
+    for k in 0..4 {
+        let top = a[k] as f64 * (1.0 - tx) + b[k] as f64 * tx;
+        let bottom = c[k] as f64 * (1.0 - tx) + d[k] as f64 * tx;
+        out[k] = top * (1.0 - ty) + bottom * ty;
+    }
+    out
+}
+
+/// What both renderers sample for one lighting: the environment itself (seen where rays miss
+/// and behind transparent objects), its diffuse irradiance over pi, and one specular map per
+/// shininess.
+#[derive(Debug, Clone)]
+pub struct Filtered {
+    pub background: CoeffMap,
+    pub diffuse: CoeffMap,
+    /// `(shininess, map)` in the order asked for.
+    pub specular: Vec<(f64, CoeffMap)>,
+}
+
+/// Pre-filters an environment for the given shininess values.
+pub fn prefilter(env: &Environment, shininess: &[f64]) -> Filtered {
+    let source: Arc<CoeffMap> = match env {
+        Environment::Uniform { radiance } => {
+            let c = CoeffMap::constant([0.0, 0.0, 0.0, *radiance as f32]);
+            return Filtered {
+                background: c.clone(),
+                diffuse: c.clone(),
+                specular: shininess.iter().map(|&n| (n, c.clone())).collect(),
+            };
+        }
+        Environment::SkyGround {
+            sky,
+            ground,
+            blend_deg,
+        } => {
+            let (sky, ground) = (*sky, *ground);
+            let b = blend_deg.to_radians().sin().max(1e-6);
+            Arc::new(CoeffMap::from_fn(SOURCE_ROWS, |d| {
+                let t = ((d[1] / b) * 0.5 + 0.5).clamp(0.0, 1.0);
+                let t = t * t * (3.0 - 2.0 * t);
+                [0.0, 0.0, 0.0, (ground + (sky - ground) * t) as f32]
+            }))
+        }
+        Environment::Map(m) => m.clone(),
+    };
+    let src = &*source;
+    let dirs: Vec<([f64; 3], f64)> = (0..src.width * src.height)
+        .map(|i| {
+            let (x, y) = (i % src.width, i / src.width);
+            (
+                direction(src.width, src.height, x, y),
+                solid_angle(src.width, src.height, y),
+            )
+        })
+        .collect();
+    // Cosine-weighted mean radiance = irradiance / pi (normalised by the discrete weights, so a
+    // constant map stays exactly constant).
+    let diffuse = CoeffMap::from_fn(DIFFUSE_ROWS, |n| {
+        filtered(src, &dirs, n, |c| c.max(0.0) as f32 as f64)
+    });
+    let specular = shininess
+        .iter()
+        .map(|&s| {
+            let m = CoeffMap::from_fn(SPECULAR_ROWS, |r| {
+                filtered(src, &dirs, r, |c| if c > 0.0 { c.powf(s) } else { 0.0 })
+            });
+            (s, m)
+        })
+        .collect();
+    Filtered {
+        background: src.clone(),
+        diffuse,
+        specular,
+    }
+}
+
+/// `sum c_i w_i / sum w_i` with `w_i = lobe(d . w_i) * omega_i`; the source's own value where the
+/// lobe is too narrow for any texel.
+fn filtered(
+    src: &CoeffMap,
+    dirs: &[([f64; 3], f64)],
+    d: [f64; 3],
+    lobe: impl Fn(f64) -> f64,
+) -> [f32; 4] {
+    let mut acc = [0.0f64; 4];
+    let mut wsum = 0.0;
+    for (t, (w, omega)) in src.texels.iter().zip(dirs) {
+        let c = d[0] * w[0] + d[1] * w[1] + d[2] * w[2];
+        let wt = lobe(c) * omega;
+        if wt > 0.0 {
+            wsum += wt;
+            for k in 0..4 {
+                acc[k] += wt * t[k] as f64;
+            }
+        }
+    }
+    if wsum > 0.0 && wsum.is_finite() {
+        acc.map(|v| (v / wsum) as f32)
+    } else {
+        src.sample(d).map(|v| v as f32)
+    }
+}
+
+/// What loading an environment file found.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct EnvReport {
+    pub file: String,
+    /// `rgb`, `basis` or `spectral`.
+    pub kind: &'static str,
+    pub input_size: [usize; 2],
+    pub light: String,
+    pub sun_spd: String,
+    /// The sun taken out as a directional light (None: no sun found).
+    pub sun_direction: Option<[f64; 3]>,
+    pub sun_irradiance: Option<f64>,
+    /// Spectral input: the largest relative residual of the projection onto the basis.
+    pub projection_residual: Option<f64>,
+}
+
+/// The sun SPD given to sun pixels by `specmap convert` (and here): CIE D65, as in the paper.
+const SUN_SPD: &str = "D65";
+
+/// Loads an environment map file as a lighting: an RGB EXR/HDR (converted on the fly with
+/// `light` as the main light, exact mode, the sun found and given D65), a `basis` EXR from
+/// `specmap convert --format basis`, or a spectral EXR (projected onto the basis and the sun's
+/// SPD). The sun becomes a directional light and leaves the map.
+pub fn load(path: &Path, light: &str) -> Result<(Lighting, EnvReport)> {
+    let channels = exr_channels(path).unwrap_or_default();
+    let has = |n: &str| channels.iter().any(|c| c == n);
+    if has("c_R") && has("c_G") && has("c_B") {
+        load_basis(path)
+    } else if channels
+        .iter()
+        .any(|c| exrio::parse_spectral_channel_name(c).is_some())
+    {
+        load_spectral(path, light)
+    } else {
+        load_rgb(path, light)
+    }
+}
+
+fn exr_channels(path: &Path) -> Option<Vec<String>> {
+    let meta = exr::meta::MetaData::read_from_file(path, false).ok()?;
+    Some(
+        meta.headers
+            .first()?
+            .channels
+            .list
+            .iter()
+            .map(|c| c.name.to_string())
+            .collect(),
+    )
+}
+
+fn fit_upsampler(light: &str, basis: [&str; 3]) -> Result<(Upsampler, String)> {
+    let grid = WavelengthGrid::new(380.0, 780.0, 5.0)?;
+    let input = FitInput::from_names(
+        light,
+        basis,
+        &grid,
+        Observer::Cie1931,
+        Rule::Riemann,
+        RgbSpace::SRGB,
+    )?;
+    let f = fit::fit(&input, Mode::Exact)?;
+    Ok((Upsampler::new(&f, &RgbSpace::SRGB), f.light))
+}
+
+fn lighting(light: &str, basis: [&str; 3], env: CoeffMap, sun: Option<Sun>) -> Result<Lighting> {
+    let l = crate::data::spectrum(light)?;
+    let [a, b, c] = basis.map(crate::data::spectrum);
+    let e = crate::data::spectrum(SUN_SPD)?;
+    Ok(Lighting {
+        label: l.label,
+        light: l.data,
+        basis_reflectance: [a?.data, b?.data, c?.data],
+        e_spd: e.data,
+        e_label: e.label,
+        environment: Environment::Map(Arc::new(env)),
+        sun,
+    })
+}
+
+fn sanitize(img: &mut RgbImage) {
+    for p in img.pixels.iter_mut() {
+        for v in p.iter_mut() {
+            if !v.is_finite() || *v < 0.0 {
+                *v = 0.0;
+            }
+        }
+    }
+}
+
+/// Sum of `s * omega` and the energy-weighted mean direction of the pixels `s` (a value per
+/// pixel of `map`).
+fn directional(map: &EnvMap, s: &[f64]) -> Option<Sun> {
+    let w = map.image.width;
+    let (mut e, mut d) = (0.0, [0.0f64; 3]);
+    for (i, &v) in s.iter().enumerate() {
+        if v > 0.0 {
+            let (x, y) = (i % w, i / w);
+            let (Some(dir), omega) = (map.direction(x, y), map.solid_angle(x, y)) else {
+                continue;
+            };
+            e += v * omega;
+            for k in 0..3 {
+                d[k] += v * omega * dir[k];
+            }
+        }
+    }
+    let n = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+    (e > 0.0 && n > 0.0).then(|| Sun {
+        direction: d.map(|v| v / n),
+        irradiance: e,
+    })
+}
+
+/// Resamples a map (any layout) to the renderer's lat-long and expands each texel with `f`.
+fn to_coefficients(map: &EnvMap, f: impl Fn([f32; 3]) -> [f64; 3] + Sync) -> CoeffMap {
+    let ll = map.resample(Layout::LatLong, SOURCE_ROWS);
+    let texels = ll
+        .image
+        .pixels
+        .par_iter()
+        .map(|&p| {
+            let c = f(p);
+            [c[0] as f32, c[1] as f32, c[2] as f32, 0.0]
+        })
+        .collect();
+    CoeffMap {
+        width: ll.image.width,
+        height: ll.image.height,
+        texels,
+    }
+}
+
+fn read_map(path: &Path) -> Result<(EnvMap, [usize; 2])> {
+    let img = exrio::read_rgb(path, None)?;
+    let attr = img.envmap.map(|a| match a {
+        EnvmapAttr::LatLong => Layout::LatLong,
+        EnvmapAttr::Cube => Layout::Cube,
+    });
+    let size = [img.image.width, img.image.height];
+    let layout = detect(img.image.width, img.image.height, attr)
+        .map_err(|e| Error::invalid(format!("{}: {e}", path.display())))?;
+    let mut image = img.image;
+    sanitize(&mut image);
+    let map = EnvMap::new(layout, image)
+        .map_err(|e| Error::invalid(format!("{}: {e}", path.display())))?;
+    Ok((map, size))
+}
+
+fn load_rgb(path: &Path, light: &str) -> Result<(Lighting, EnvReport)> {
+    let (mut map, input_size) = read_map(path)?;
+    let space = RgbSpace::SRGB;
+    let search = find_sun(&map, &space, &SunSettings::default());
+    let m = space.to_xyz_matrix();
+    let y_row = [m[(1, 0)], m[(1, 1)], m[(1, 2)]];
+    let mut s = vec![0.0; map.image.pixels.len()];
+    if let Some(sun) = search.sun() {
+        for &i in &sun.pixels {
+            let p = map.image.pixels[i];
+            s[i] = (0..3).map(|k| y_row[k] * p[k] as f64).sum::<f64>().max(0.0);
+            map.image.pixels[i] = [0.0; 3];
+        }
+    }
+    let sun = directional(&map, &s);
+    let basis = fit::PAPER_BASIS;
+    let (up, light_label) = fit_upsampler(light, basis)?;
+    let coeffs = to_coefficients(&map, |p| {
+        up.coefficients([p[0] as f64, p[1] as f64, p[2] as f64])
+    });
+    let report = EnvReport {
+        file: path.display().to_string(),
+        kind: "rgb",
+        input_size,
+        light: light_label,
+        sun_spd: SUN_SPD.into(),
+        sun_direction: sun.map(|s| s.direction),
+        sun_irradiance: sun.map(|s| s.irradiance),
+        projection_residual: None,
+    };
+    Ok((lighting(light, basis, coeffs, sun)?, report))
+}
+
+fn text_attr(attrs: &[(String, AttrValue)], name: &str) -> Option<String> {
+    attrs.iter().find_map(|(n, v)| match v {
+        AttrValue::Text(t) if n == name => Some(t.clone()),
+        _ => None,
+    })
+}
+
+/// Reads the four channels of a `basis` EXR into two RGB maps (c and s) of its layout.
+fn load_basis(path: &Path) -> Result<(Lighting, EnvReport)> {
+    use exr::image::FlatSamples;
+    use exr::meta::attribute::{AttributeValue, Text};
+    use exr::prelude::read_first_flat_layer_from_file;
+    let image = read_first_flat_layer_from_file(path).map_err(|e| {
+        Error::invalid(format!(
+            "{}: reading the basis OpenEXR: {e}",
+            path.display()
+        ))
+    })?;
+    let layer = &image.layer_data;
+    let (w, h) = (layer.size.0, layer.size.1);
+    let channel = |name: &str| -> Result<Vec<f32>> {
+        let c = layer
+            .channel_data
+            .list
+            .iter()
+            .find(|c| c.name.to_string() == name)
+            .ok_or_else(|| Error::invalid(format!("{}: no channel {name}", path.display())))?;
+        Ok(match &c.sample_data {
+            FlatSamples::F16(v) => v.iter().map(|x| x.to_f32()).collect(),
+            FlatSamples::F32(v) => v.clone(),
+            FlatSamples::U32(v) => v.iter().map(|&x| x as f32).collect(),
+        })
+    };
+    let (cr, cg, cb) = (channel("c_R")?, channel("c_G")?, channel("c_B")?);
+    let sun_ch = channel("sun").unwrap_or_else(|_| vec![0.0; w * h]);
+    let mut attrs = Vec::new();
+    for (name, value) in layer.attributes.other.iter() {
+        if let AttributeValue::Text(t) = value {
+            attrs.push((name.to_string(), AttrValue::Text(t.to_string())));
+        }
+    }
+    let ev = layer
+        .attributes
+        .other
+        .iter()
+        .find_map(|(n, v)| match (n.to_string().as_str(), v) {
+            ("EV", AttributeValue::F32(x)) => Some(*x as f64),
+            ("EV", AttributeValue::F64(x)) => Some(*x),
+            _ => None,
+        });
+    let scale = ev.map(|e| e.exp2()).unwrap_or(1.0) as f32;
+    let light = text_attr(&attrs, "specmap.light").ok_or_else(|| {
+        Error::invalid(format!(
+            "{}: a basis map needs the specmap.light attribute that `specmap convert --format \
+             basis` writes",
+            path.display()
+        ))
+    })?;
+    let basis_names: Vec<String> = text_attr(&attrs, "specmap.basis")
+        .map(|b| b.split(',').map(String::from).collect())
+        .unwrap_or_else(|| fit::PAPER_BASIS.map(String::from).to_vec());
+    if basis_names.len() != 3 {
+        return Err(Error::invalid(format!(
+            "{}: specmap.basis must name three spectra",
+            path.display()
+        )));
+    }
+    let envmap = image
+        .attributes
+        .other
+        .get(&Text::from("envmap"))
+        .or_else(|| layer.attributes.other.get(&Text::from("envmap")))
+        .and_then(|v| match v {
+            AttributeValue::EnvironmentMap(exr::meta::attribute::EnvironmentMap::Cube) => {
+                Some(Layout::Cube)
+            }
+            AttributeValue::EnvironmentMap(_) => Some(Layout::LatLong),
+            _ => None,
+        });
+    let layout =
+        detect(w, h, envmap).map_err(|e| Error::invalid(format!("{}: {e}", path.display())))?;
+    let mut c_img = RgbImage::new(w, h);
+    let mut s = vec![0.0; w * h];
+    for i in 0..w * h {
+        c_img.pixels[i] = [cr[i] * scale, cg[i] * scale, cb[i] * scale];
+        let v = (sun_ch[i] * scale) as f64;
+        s[i] = if v.is_finite() { v.max(0.0) } else { 0.0 };
+        if !c_img.pixels[i].iter().all(|v| v.is_finite()) {
+            c_img.pixels[i] = [0.0; 3];
+        }
+    }
+    let map = EnvMap::new(layout, c_img)
+        .map_err(|e| Error::invalid(format!("{}: {e}", path.display())))?;
+    let sun = directional(&map, &s);
+    // Coefficients resample linearly (negative ones included: EnvMap's filter is linear).
+    let coeffs = to_coefficients(&map, |p| [p[0] as f64, p[1] as f64, p[2] as f64]);
+    let names = [&basis_names[0], &basis_names[1], &basis_names[2]].map(|s| s.trim());
+    let lit = lighting(&light, names, coeffs, sun).map_err(|e| {
+        Error::invalid(format!(
+            "{}: the map's light or basis ({light}; {}) is not a known spectrum: {e}",
+            path.display(),
+            basis_names.join(", ")
+        ))
+    })?;
+    let report = EnvReport {
+        file: path.display().to_string(),
+        kind: "basis",
+        input_size: [w, h],
+        light,
+        sun_spd: SUN_SPD.into(),
+        sun_direction: sun.map(|s| s.direction),
+        sun_irradiance: sun.map(|s| s.irradiance),
+        projection_residual: None,
+    };
+    Ok((lit, report))
+}
+
+/// Projects every pixel's spectrum onto the basis (as `convert` would have written it: the
+/// header's light and basis, or `light` and the paper's basis) and the sun's SPD by least squares.
+fn load_spectral(path: &Path, light: &str) -> Result<(Lighting, EnvReport)> {
+    let info = exrio::read_spectral_info(path)?;
+    let light = text_attr(&info.attributes, "specmap.light").unwrap_or_else(|| light.to_string());
+    let basis_names: Vec<String> = text_attr(&info.attributes, "specmap.basis")
+        .map(|b| b.split(',').map(|s| s.trim().to_string()).collect())
+        .filter(|v: &Vec<String>| v.len() == 3)
+        .unwrap_or_else(|| fit::PAPER_BASIS.map(String::from).to_vec());
+    let names = [&basis_names[0], &basis_names[1], &basis_names[2]].map(|s| s.as_str());
+    let wl = info.wavelengths_nm.clone();
+    // The four spectra on the file's wavelengths, scaled as convert scales them (Y = 1).
+    let step = Tabulated::new(wl.clone(), vec![0.0; wl.len()])?
+        .uniform_step_nm()
+        .unwrap_or(1.0);
+    let grid = WavelengthGrid::new(wl[0], wl[wl.len() - 1], step).map_err(|_| {
+        Error::invalid(format!(
+            "{}: the spectral channels are not evenly spaced; the renderer needs a uniform grid",
+            path.display()
+        ))
+    })?;
+    let probe = lighting(&light, names, CoeffMap::constant([0.0; 4]), None)?;
+    let spectra =
+        super::prepare::lighting_spectra(&probe, &grid, Rule::Riemann, Observer::Cie1931)?;
+    // Normal equations of the 4-function least squares.
+    let n = wl.len();
+    let g = nalgebra::Matrix4::from_fn(|a, b| (0..n).map(|i| spectra[a][i] * spectra[b][i]).sum());
+    let ginv = g.try_inverse().ok_or_else(|| {
+        Error::invalid(format!(
+            "{}: the basis and the sun's SPD are linearly dependent on the file's {} \
+             wavelengths; cannot project",
+            path.display(),
+            n
+        ))
+    })?;
+    let (w, h) = (info.width, info.height);
+    let mut c_img = RgbImage::new(w, h);
+    let mut s = vec![0.0; w * h];
+    let mut worst = 0.0f64;
+    exrio::read_spectral_rows(path, |y, row| {
+        let per = row.len() / w;
+        for x in 0..w {
+            let px = &row[x * per..x * per + n];
+            let b = nalgebra::Vector4::from_fn(|a, _| {
+                (0..n).map(|i| spectra[a][i] * px[i] as f64).sum::<f64>()
+            });
+            let c = ginv * b;
+            let norm: f64 = px.iter().map(|v| (*v as f64).powi(2)).sum::<f64>().sqrt();
+            let res: f64 = (0..n)
+                .map(|i| {
+                    let fit: f64 = (0..4).map(|a| c[a] * spectra[a][i]).sum();
+                    (fit - px[i] as f64).powi(2)
+                })
+                .sum::<f64>()
+                .sqrt();
+            if norm > 0.0 && res.is_finite() {
+                worst = worst.max(res / norm);
+            }
+            let i = y * w + x;
+            // A pixel is the sun's when its projection is mostly on the sun's SPD.
+            let sun_like = c[3] > 0.0 && c[3] > 10.0 * c[0].abs().max(c[1].abs()).max(c[2].abs());
+            if sun_like {
+                s[i] = c[3];
+            } else {
+                c_img.pixels[i] = [c[0] as f32, c[1] as f32, c[2] as f32];
+            }
+        }
+    })?;
+    let layout = detect(
+        w,
+        h,
+        info.envmap.map(|a| match a {
+            EnvmapAttr::LatLong => Layout::LatLong,
+            EnvmapAttr::Cube => Layout::Cube,
+        }),
+    )
+    .map_err(|e| Error::invalid(format!("{}: {e}", path.display())))?;
+    let map = EnvMap::new(layout, c_img)
+        .map_err(|e| Error::invalid(format!("{}: {e}", path.display())))?;
+    let sun = directional(&map, &s);
+    let coeffs = to_coefficients(&map, |p| [p[0] as f64, p[1] as f64, p[2] as f64]);
+    let lit = lighting(&light, names, coeffs, sun)?;
+    let report = EnvReport {
+        file: path.display().to_string(),
+        kind: "spectral",
+        input_size: [w, h],
+        light,
+        sun_spd: SUN_SPD.into(),
+        sun_direction: sun.map(|s| s.direction),
+        sun_irradiance: sun.map(|s| s.irradiance),
+        projection_residual: Some(worst),
+    };
+    Ok((lit, report))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn texel_centres_sample_to_themselves_and_solid_angles_tile_the_sphere() {
+        let (w, h) = (16, 8);
+        let m = CoeffMap {
+            width: w,
+            height: h,
+            texels: (0..w * h).map(|i| [i as f32, 0.0, 0.0, 1.0]).collect(),
+        };
+        for y in 0..h {
+            for x in 0..w {
+                let v = m.sample(direction(w, h, x, y));
+                assert!((v[0] - (y * w + x) as f64).abs() < 1e-6, "({x},{y}) {v:?}");
+                assert!((v[3] - 1.0).abs() < 1e-12);
+            }
+        }
+        let total: f64 = (0..h).map(|y| w as f64 * solid_angle(w, h, y)).sum();
+        assert!((total - 4.0 * PI).abs() < 1e-12);
+    }
+
+    #[test]
+    fn prefiltering_keeps_a_constant_environment_constant() {
+        let env = Environment::SkyGround {
+            sky: 0.7,
+            ground: 0.7,
+            blend_deg: 10.0,
+        };
+        let f = prefilter(&env, &[0.0, 50.0]);
+        for m in std::iter::once(&f.diffuse).chain(f.specular.iter().map(|(_, m)| m)) {
+            assert!(m.texels.iter().all(|t| (t[3] - 0.7).abs() < 1e-5));
+        }
+    }
+}

@@ -1,0 +1,291 @@
+//! The GPU renderer: one wgpu compute dispatch of `gpu.wgsl` (headless, no surface), storage
+//! buffers for the spectra, maps and objects, the linear RGB image read back.
+
+use super::prepare::Prepared;
+use super::Image;
+use crate::error::{Error, Result};
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+use wgpu::util::DeviceExt;
+
+/// The shader, next to the host code that drives it.
+pub const SHADER: &str = include_str!("gpu.wgsl");
+
+/// A device with the renderer's pipeline, created once and reused for many frames.
+pub struct Gpu {
+    device: wgpu::Device,
+    queue: wgpu::Queue,
+    pipeline: wgpu::ComputePipeline,
+    info: wgpu::AdapterInfo,
+    limits: wgpu::Limits,
+    errors: Arc<Mutex<Vec<String>>>,
+}
+
+/// What the adapter is, for reports.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct AdapterReport {
+    pub name: String,
+    pub backend: String,
+    pub device_type: String,
+    pub driver: String,
+}
+
+/// Where the time of one GPU frame went, in seconds.
+#[derive(Debug, Clone, Copy, serde::Serialize)]
+pub struct GpuTiming {
+    /// Creating and filling the buffers.
+    pub upload_s: f64,
+    /// The compute dispatch, from submit until the device is idle.
+    pub compute_s: f64,
+    /// Copying the image back and mapping it.
+    pub readback_s: f64,
+}
+
+impl std::fmt::Debug for Gpu {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Gpu")
+            .field("adapter", &self.info.name)
+            .finish()
+    }
+}
+
+impl Gpu {
+    /// Finds an adapter (any backend wgpu was built with; `WGPU_BACKEND` and
+    /// `WGPU_ADAPTER_NAME` are honoured), opens a device and compiles the shader. An error, never
+    /// a panic, when there is no adapter or the shader does not compile.
+    pub fn new() -> Result<Gpu> {
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+            power_preference: wgpu::PowerPreference::HighPerformance,
+            force_fallback_adapter: false,
+            compatible_surface: None,
+            ..Default::default()
+        }))
+        .map_err(|e| {
+            Error::invalid(format!(
+                "no GPU adapter found ({e}); install a Vulkan driver (e.g. Mesa's lavapipe, \
+                 package mesa-vulkan-drivers) or use the CPU backend"
+            ))
+        })?;
+        let info = adapter.get_info();
+        let alimits = adapter.limits();
+        let mut limits = wgpu::Limits::downlevel_defaults();
+        limits.max_storage_buffers_per_shader_stage = 7;
+        limits.max_storage_buffer_binding_size = alimits.max_storage_buffer_binding_size;
+        limits.max_buffer_size = alimits.max_buffer_size;
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("specmap render"),
+            required_features: wgpu::Features::empty(),
+            required_limits: limits.clone(),
+            experimental_features: wgpu::ExperimentalFeatures::disabled(),
+            memory_hints: wgpu::MemoryHints::Performance,
+            trace: wgpu::Trace::Off,
+        }))
+        .map_err(|e| {
+            Error::invalid(format!(
+                "the GPU adapter {} could not open a device: {e}",
+                info.name
+            ))
+        })?;
+        let errors: Arc<Mutex<Vec<String>>> = Arc::default();
+        {
+            let errors = errors.clone();
+            device.on_uncaptured_error(Arc::new(move |e| {
+                if let Ok(mut v) = errors.lock() {
+                    v.push(e.to_string());
+                }
+            }));
+        }
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("render.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(SHADER.into()),
+        });
+        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("render"),
+            layout: None,
+            module: &module,
+            entry_point: Some("main"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(Error::invalid(format!(
+                "the render shader failed on {}: {e}",
+                info.name
+            )));
+        }
+        Ok(Gpu {
+            device,
+            queue,
+            pipeline,
+            info,
+            limits,
+            errors,
+        })
+    }
+
+    pub fn adapter(&self) -> AdapterReport {
+        AdapterReport {
+            name: self.info.name.clone(),
+            backend: format!("{:?}", self.info.backend).to_lowercase(),
+            device_type: format!("{:?}", self.info.device_type),
+            driver: format!("{} {}", self.info.driver, self.info.driver_info)
+                .trim()
+                .to_string(),
+        }
+    }
+
+    /// Whether the adapter is a CPU (software) implementation such as lavapipe.
+    pub fn is_software(&self) -> bool {
+        self.info.device_type == wgpu::DeviceType::Cpu
+    }
+
+    fn storage(&self, label: &str, bytes: &[u8]) -> Result<wgpu::Buffer> {
+        // Bindings cannot be empty: pad with zeros.
+        let mut padded;
+        let contents = if bytes.len() < 16 {
+            padded = bytes.to_vec();
+            padded.resize(16, 0);
+            &padded[..]
+        } else {
+            bytes
+        };
+        if contents.len() as u64 > self.limits.max_storage_buffer_binding_size {
+            return Err(Error::invalid(format!(
+                "{label}: {} bytes exceed the adapter's storage buffer limit of {} bytes",
+                contents.len(),
+                self.limits.max_storage_buffer_binding_size
+            )));
+        }
+        Ok(self
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage: wgpu::BufferUsages::STORAGE,
+            }))
+    }
+
+    /// Renders the prepared scene.
+    pub fn render(&self, p: &Prepared) -> Result<(Image, GpuTiming)> {
+        let t0 = Instant::now();
+        let (w, h) = (p.params.width as usize, p.params.height as usize);
+        let out_bytes = (w * h * 16) as u64;
+        if out_bytes > self.limits.max_storage_buffer_binding_size {
+            return Err(Error::invalid(format!(
+                "a {w}x{h} image needs {out_bytes} bytes, above the adapter's storage buffer \
+                 limit of {} bytes; render a smaller image",
+                self.limits.max_storage_buffer_binding_size
+            )));
+        }
+        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let params = self
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("params"),
+                contents: bytemuck::bytes_of(&p.params),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+        let spectra = self.storage("spectra", bytemuck::cast_slice(&p.spectra))?;
+        let objects = self.storage("objects", bytemuck::cast_slice(&p.objects))?;
+        let materials = self.storage("materials", bytemuck::cast_slice(&p.materials))?;
+        let lightings = self.storage("lightings", bytemuck::cast_slice(&p.lightings))?;
+        let maps = self.storage("maps", bytemuck::cast_slice(&p.maps))?;
+        let texels = self.storage("texels", bytemuck::cast_slice(&p.texels))?;
+        let out = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("out"),
+            size: out_bytes,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("staging"),
+            size: out_bytes,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let layout = self.pipeline.get_bind_group_layout(0);
+        let entries: Vec<wgpu::BindGroupEntry> = [
+            &params, &spectra, &objects, &materials, &lightings, &maps, &texels, &out,
+        ]
+        .iter()
+        .enumerate()
+        .map(|(i, b)| wgpu::BindGroupEntry {
+            binding: i as u32,
+            resource: b.as_entire_binding(),
+        })
+        .collect();
+        let bind = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("render"),
+            layout: &layout,
+            entries: &entries,
+        });
+        self.poll()?;
+        let t1 = Instant::now();
+        let mut enc = self
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+        {
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("render"),
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &bind, &[]);
+            pass.dispatch_workgroups((w as u32).div_ceil(8), (h as u32).div_ceil(8), 1);
+        }
+        self.queue.submit([enc.finish()]);
+        self.poll()?;
+        let t2 = Instant::now();
+        let mut enc = self
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+        enc.copy_buffer_to_buffer(&out, 0, &staging, 0, out_bytes);
+        self.queue.submit([enc.finish()]);
+        let slice = staging.slice(..);
+        let (tx, rx) = std::sync::mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        self.poll()?;
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(Error::invalid(format!("GPU render failed: {e}")));
+        }
+        if let Some(e) = self.errors.lock().ok().and_then(|mut v| v.pop()) {
+            return Err(Error::invalid(format!("GPU render failed: {e}")));
+        }
+        rx.recv()
+            .map_err(|_| Error::invalid("GPU readback was cancelled"))?
+            .map_err(|e| Error::invalid(format!("GPU readback failed: {e}")))?;
+        let pixels: Vec<[f32; 3]> = {
+            let data = slice
+                .get_mapped_range()
+                .map_err(|e| Error::invalid(format!("GPU readback failed: {e}")))?;
+            let v: &[[f32; 4]] = bytemuck::cast_slice(&data);
+            v.iter().map(|p| [p[0], p[1], p[2]]).collect()
+        };
+        staging.unmap();
+        let t3 = Instant::now();
+        Ok((
+            Image {
+                width: w,
+                height: h,
+                pixels,
+            },
+            GpuTiming {
+                upload_s: (t1 - t0).as_secs_f64(),
+                compute_s: (t2 - t1).as_secs_f64(),
+                readback_s: (t3 - t2).as_secs_f64(),
+            },
+        ))
+    }
+
+    fn poll(&self) -> Result<()> {
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map(|_| ())
+            .map_err(|e| Error::invalid(format!("waiting for the GPU: {e}")))
+    }
+}

@@ -1,0 +1,389 @@
+// Spectral preview renderer, one invocation per pixel: the model of src/render/mod.rs, the same
+// function as src/render/cpu.rs in f32. The film is the thin-film module's coherent recursion
+// (src/thinfilm.rs, Film::coherent_rt, unpolarised) ported line by line.
+
+struct Params {
+    width: u32,
+    height: u32,
+    n_wl: u32,
+    n_objects: u32,
+    background: u32,
+    cmf_offset: u32,
+    wl_offset: u32,
+    pad: u32,
+    view: vec4<f32>,
+    rgb0: vec4<f32>,
+    rgb1: vec4<f32>,
+    rgb2: vec4<f32>,
+}
+
+struct Object {
+    kind: u32,
+    material: u32,
+    lighting: u32,
+    spec_map: u32,
+    p0: vec4<f32>,
+    p1: vec4<f32>,
+    ramp: vec4<f32>,
+    flags: vec4<u32>,
+}
+
+struct Material {
+    flags: u32,
+    n_layers: u32,
+    diffuse_offset: u32,
+    film_offset: u32,
+    coef: vec4<f32>,
+    thickness: array<vec4<f32>, 2>,
+}
+
+struct Lighting {
+    spectra: u32,
+    diffuse_map: u32,
+    background_map: u32,
+    has_sun: u32,
+    sun: vec4<f32>,
+}
+
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(1) var<storage, read> spectra: array<f32>;
+@group(0) @binding(2) var<storage, read> objects: array<Object>;
+@group(0) @binding(3) var<storage, read> materials: array<Material>;
+@group(0) @binding(4) var<storage, read> lightings: array<Lighting>;
+@group(0) @binding(5) var<storage, read> maps: array<vec4<u32>>;
+@group(0) @binding(6) var<storage, read> texels: array<vec4<f32>>;
+@group(0) @binding(7) var<storage, read_write> out_rgb: array<vec4<f32>>;
+
+const PI: f32 = 3.14159265358979;
+const TWO_PI: f32 = 6.28318530717959;
+const SPHERE: u32 = 0u;
+const CYLINDER_X: u32 = 1u;
+const QUAD: u32 = 2u;
+const TRANSPARENT: u32 = 1u;
+const HAS_FILM: u32 = 2u;
+const HAS_DIFFUSE: u32 = 4u;
+
+// ---- environment maps (env.rs: sample) -------------------------------------------------------
+
+fn sample_map(map: u32, dir: vec3<f32>) -> vec4<f32> {
+    let m = maps[map];
+    let off = m.x;
+    let w = m.y;
+    let h = m.z;
+    let u = 0.5 - atan2(dir.x, dir.z) / TWO_PI;
+    let v = acos(clamp(dir.y, -1.0, 1.0)) / PI;
+    let fx = u * f32(w) - 0.5;
+    let fy = clamp(v * f32(h) - 0.5, 0.0, f32(h - 1u));
+    let x0f = floor(fx);
+    let tx = fx - x0f;
+    let y0f = floor(fy);
+    let ty = fy - y0f;
+    let wi = i32(w);
+    let x0 = u32(((i32(x0f) % wi) + wi) % wi);
+    let x1 = (x0 + 1u) % w;
+    let y0 = u32(y0f);
+    let y1 = min(y0 + 1u, h - 1u);
+    let a = texels[off + y0 * w + x0];
+    let b = texels[off + y0 * w + x1];
+    let c = texels[off + y1 * w + x0];
+    let d = texels[off + y1 * w + x1];
+    let top = a * (1.0 - tx) + b * tx;
+    let bottom = c * (1.0 - tx) + d * tx;
+    return top * (1.0 - ty) + bottom * ty;
+}
+
+// ---- complex arithmetic ----------------------------------------------------------------------
+
+fn cmul(a: vec2<f32>, b: vec2<f32>) -> vec2<f32> {
+    return vec2<f32>(a.x * b.x - a.y * b.y, a.x * b.y + a.y * b.x);
+}
+
+fn cdiv(a: vec2<f32>, b: vec2<f32>) -> vec2<f32> {
+    let d = b.x * b.x + b.y * b.y;
+    return vec2<f32>((a.x * b.x + a.y * b.y) / d, (a.y * b.x - a.x * b.y) / d);
+}
+
+fn norm2(a: vec2<f32>) -> f32 {
+    return a.x * a.x + a.y * a.y;
+}
+
+// sqrt on the forward branch: Im >= 0, and Re >= 0 when Im = 0 (thinfilm.rs: forward_sqrt).
+fn forward_sqrt(z: vec2<f32>) -> vec2<f32> {
+    let m = length(z);
+    if (m == 0.0) {
+        return vec2<f32>(0.0, 0.0);
+    }
+    var a: f32;
+    var b: f32;
+    if (z.x >= 0.0) {
+        a = sqrt((m + z.x) / 2.0);
+        b = z.y / (2.0 * a);
+    } else {
+        b = sqrt((m - z.x) / 2.0);
+        a = z.y / (2.0 * b);
+    }
+    if (b < 0.0 || (b == 0.0 && a < 0.0)) {
+        return vec2<f32>(-a, -b);
+    }
+    return vec2<f32>(a, b);
+}
+
+// ---- thin film (thinfilm.rs) -----------------------------------------------------------------
+
+struct Medium {
+    n: vec2<f32>,
+    n2: vec2<f32>,
+    q: vec2<f32>,
+}
+
+fn film_index(mat: Material, m: u32, i: u32) -> vec2<f32> {
+    let nw = params.n_wl;
+    let base = mat.film_offset + 2u * m * nw + i;
+    return vec2<f32>(spectra[base], spectra[base + nw]);
+}
+
+// Medium m (0 = ambient) seen with xi^2 given by g = (n0^2, q0^2).
+fn medium(mat: Material, m: u32, i: u32, cos0: f32) -> Medium {
+    let n = film_index(mat, m, i);
+    let n2 = cmul(n, n);
+    if (m == 0u) {
+        return Medium(n, n2, vec2<f32>(n.x * cos0, 0.0));
+    }
+    let n0 = film_index(mat, 0u, i).x;
+    let q0 = n0 * cos0;
+    let z = vec2<f32>(n2.x - n0 * n0 + q0 * q0, n2.y);
+    return Medium(n, n2, forward_sqrt(z));
+}
+
+struct Amp {
+    r: vec2<f32>,
+    t: vec2<f32>,
+}
+
+fn fresnel(p_wave: bool, a: Medium, b: Medium) -> Amp {
+    if (all(a.n == b.n)) {
+        return Amp(vec2<f32>(0.0, 0.0), vec2<f32>(1.0, 0.0));
+    }
+    if (!p_wave) {
+        let den = a.q + b.q;
+        return Amp(cdiv(a.q - b.q, den), cdiv(a.q * 2.0, den));
+    }
+    let x = cmul(b.n2, a.q);
+    let y = cmul(a.n2, b.q);
+    let den = x + y;
+    return Amp(cdiv(x - y, den), cdiv(cmul(cmul(a.n, b.n), a.q) * 2.0, den));
+}
+
+fn propagate(q: vec2<f32>, d_over_lambda: f32) -> vec2<f32> {
+    let cycles = q.x * d_over_lambda;
+    let frac = cycles - round(cycles);
+    let ph = TWO_PI * frac;
+    let decay = exp(-(TWO_PI * q.y * d_over_lambda));
+    return vec2<f32>(decay * cos(ph), decay * sin(ph));
+}
+
+fn flux(p_wave: bool, m: Medium) -> f32 {
+    if (!p_wave) {
+        return m.q.x;
+    }
+    return cmul(m.n2, vec2<f32>(m.q.x, -m.q.y)).x / norm2(m.n);
+}
+
+fn layer_thickness(mat: Material, k: u32) -> f32 {
+    return mat.thickness[k / 4u][k % 4u];
+}
+
+// Unpolarised (R, T) of the material's film at wavelength index i, cos of the angle in the
+// ambient, thicknesses times scale.
+fn film_rt(mat: Material, i: u32, cos0: f32, scale: f32) -> vec2<f32> {
+    if (cos0 == 0.0) {
+        return vec2<f32>(1.0, 0.0);
+    }
+    let lambda = spectra[params.wl_offset + i];
+    let last = mat.n_layers + 1u;
+    let sub = medium(mat, last, i, cos0);
+    var j = last - 1u;
+    var here = medium(mat, j, i, cos0);
+    let one = vec2<f32>(1.0, 0.0);
+    let s0 = fresnel(false, here, sub);
+    let p0 = fresnel(true, here, sub);
+    var rs = s0.r;
+    var ts = s0.t;
+    var rp = p0.r;
+    var tp = p0.t;
+    loop {
+        if (j == 0u) {
+            break;
+        }
+        let above = medium(mat, j - 1u, i, cos0);
+        let e1 = propagate(here.q, layer_thickness(mat, j - 1u) * scale / lambda);
+        let e2 = cmul(e1, e1);
+        let sa = fresnel(false, above, here);
+        let xs = cmul(rs, e2);
+        let dens = one + cmul(sa.r, xs);
+        rs = cdiv(sa.r + xs, dens);
+        ts = cdiv(cmul(cmul(sa.t, ts), e1), dens);
+        let pa = fresnel(true, above, here);
+        let xp = cmul(rp, e2);
+        let denp = one + cmul(pa.r, xp);
+        rp = cdiv(pa.r + xp, denp);
+        tp = cdiv(cmul(cmul(pa.t, tp), e1), denp);
+        here = above;
+        j = j - 1u;
+    }
+    var t_s = 0.0;
+    let fs = flux(false, here);
+    if (fs > 0.0) {
+        t_s = norm2(ts) * flux(false, sub) / fs;
+    }
+    var t_p = 0.0;
+    let fp = flux(true, here);
+    if (fp > 0.0) {
+        t_p = norm2(tp) * flux(true, sub) / fp;
+    }
+    return vec2<f32>(0.5 * (norm2(rs) + norm2(rp)), 0.5 * (t_s + t_p));
+}
+
+// ---- shading ---------------------------------------------------------------------------------
+
+fn lobe(c: f32, n: f32) -> f32 {
+    if (c > 0.0) {
+        return pow(c, n);
+    }
+    return 0.0;
+}
+
+fn light_spectrum(off: u32, j: u32, i: u32) -> f32 {
+    return spectra[off + j * params.n_wl + i];
+}
+
+fn expand(c: vec4<f32>, off: u32, i: u32) -> f32 {
+    return c.x * light_spectrum(off, 0u, i) + c.y * light_spectrum(off, 1u, i)
+        + c.z * light_spectrum(off, 2u, i) + c.w * light_spectrum(off, 3u, i);
+}
+
+@compute @workgroup_size(8, 8, 1)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let x = gid.x;
+    let y = gid.y;
+    if (x >= params.width || y >= params.height) {
+        return;
+    }
+    let nw = params.n_wl;
+    let px = params.view.x + (f32(x) + 0.5 - 0.5 * f32(params.width)) * params.view.z;
+    let py = params.view.y - (f32(y) + 0.5 - 0.5 * f32(params.height)) * params.view.z;
+    let d = vec3<f32>(0.0, 0.0, -1.0);
+
+    // Nearest hit (cpu.rs: hit).
+    var best = -1;
+    var best_z = -3.4e38;
+    var n = vec3<f32>(0.0, 0.0, 1.0);
+    for (var k = 0u; k < params.n_objects; k = k + 1u) {
+        let o = objects[k];
+        var found = false;
+        var z = 0.0;
+        var nn = vec3<f32>(0.0, 0.0, 1.0);
+        if (o.kind == SPHERE) {
+            let dx = px - o.p0.x;
+            let dy = py - o.p0.y;
+            let r = o.p0.w;
+            let q = r * r - dx * dx - dy * dy;
+            if (q >= 0.0) {
+                let s = sqrt(q);
+                found = true;
+                z = o.p0.z + s;
+                nn = vec3<f32>(dx / r, dy / r, s / r);
+            }
+        } else if (o.kind == CYLINDER_X) {
+            let dy = py - o.p0.y;
+            let r = o.p0.w;
+            let q = r * r - dy * dy;
+            if (abs(px - o.p0.x) <= o.p1.x && q >= 0.0) {
+                let s = sqrt(q);
+                found = true;
+                z = o.p0.z + s;
+                nn = vec3<f32>(0.0, dy / r, s / r);
+            }
+        } else if (o.kind == QUAD) {
+            if (abs(px - o.p0.x) <= o.p1.x && abs(py - o.p0.y) <= o.p1.y) {
+                found = true;
+                z = o.p0.z;
+            }
+        }
+        if (found && z > best_z) {
+            best_z = z;
+            best = i32(k);
+            n = nn;
+        }
+    }
+
+    var xyz = vec3<f32>(0.0, 0.0, 0.0);
+    if (best < 0) {
+        let lt = lightings[params.background];
+        let c = sample_map(lt.background_map, d);
+        for (var i = 0u; i < nw; i = i + 1u) {
+            let l = expand(c, lt.spectra, i);
+            xyz = xyz + l * vec3<f32>(spectra[params.cmf_offset + i],
+                spectra[params.cmf_offset + nw + i], spectra[params.cmf_offset + 2u * nw + i]);
+        }
+    } else {
+        n = normalize(n);
+        let o = objects[u32(best)];
+        let mat = materials[o.material];
+        let lt = lightings[o.lighting];
+        let cos_v = clamp(n.z, 0.0, 1.0);
+        let rv = vec3<f32>(2.0 * n.z * n.x, 2.0 * n.z * n.y, 2.0 * n.z * n.z - 1.0);
+        let kd = mat.coef.x;
+        let ks = mat.coef.y;
+        let shininess = mat.coef.z;
+        let transparent = (mat.flags & TRANSPARENT) != 0u;
+        let has_film = (mat.flags & HAS_FILM) != 0u;
+        let has_diffuse = (mat.flags & HAS_DIFFUSE) != 0u;
+        let cd = sample_map(lt.diffuse_map, n);
+        let cs = sample_map(o.spec_map, rv);
+        var ct = vec4<f32>(0.0, 0.0, 0.0, 0.0);
+        if (transparent) {
+            ct = sample_map(lt.background_map, d);
+        }
+        var sun_d = 0.0;
+        var sun_s = 0.0;
+        if (lt.has_sun != 0u) {
+            let l = lt.sun.xyz;
+            sun_d = lt.sun.w * max(dot(n, l), 0.0) / PI;
+            sun_s = lt.sun.w * (shininess + 1.0) / TWO_PI * lobe(dot(rv, l), shininess);
+        }
+        var scale = 1.0;
+        if (o.flags.x != 0u) {
+            var t = 0.0;
+            if (o.ramp.y != o.ramp.x) {
+                t = clamp((px - o.ramp.x) / (o.ramp.y - o.ramp.x), 0.0, 1.0);
+            }
+            scale = o.ramp.z + (o.ramp.w - o.ramp.z) * t;
+        }
+        for (var i = 0u; i < nw; i = i + 1u) {
+            let ld = expand(cd, lt.spectra, i) + sun_d * light_spectrum(lt.spectra, 3u, i);
+            let ls = expand(cs, lt.spectra, i) + sun_s * light_spectrum(lt.spectra, 3u, i);
+            var fr = ks;
+            var ft = 1.0;
+            if (has_film) {
+                let rt = film_rt(mat, i, cos_v, scale);
+                fr = rt.x;
+                ft = rt.y;
+            }
+            var l = 0.0;
+            if (transparent) {
+                l = fr * ls + ft * expand(ct, lt.spectra, i);
+            } else {
+                var rd = 0.0;
+                if (has_diffuse) {
+                    rd = spectra[mat.diffuse_offset + i];
+                }
+                l = kd * rd * ft * ld + fr * ls;
+            }
+            xyz = xyz + l * vec3<f32>(spectra[params.cmf_offset + i],
+                spectra[params.cmf_offset + nw + i], spectra[params.cmf_offset + 2u * nw + i]);
+        }
+    }
+    let rgb = vec3<f32>(dot(params.rgb0.xyz, xyz), dot(params.rgb1.xyz, xyz), dot(params.rgb2.xyz, xyz));
+    out_rgb[y * params.width + x] = vec4<f32>(rgb, 1.0);
+}

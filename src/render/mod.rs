@@ -1,0 +1,353 @@
+//! Spectral preview renderer: the paper's spectral Phong model (Eq. 1) and multilayer thin films
+//! (Eq. 2-9) on analytic scenes, on the GPU (wgpu compute, WGSL) and on the CPU (rayon), from one
+//! scene description.
+//!
+//! # The model, per pixel and wavelength
+//! An orthographic camera looks down −Z (world: OpenEXR's, Y up). A ray hits the nearest sphere,
+//! cylinder or quad; `N` is the normal, `V = +Z` the direction to the camera, `R_v` the mirror
+//! direction of the view ray. The light is an environment plus an optional sun:
+//!
+//! - the environment is linear in four coefficients per direction (GUIDE.md):
+//!   `L(w, lambda) = sum_j c_j(w) B_j(lambda) + c_3(w) E(lambda)`, `B_j` the fitted basis spectra
+//!   of the main light, `E` the sun's (or, for a uniform light, the main light's) SPD, all scaled
+//!   to luminance Y = 1 on the render grid. Lighting integrals are taken in coefficient space on
+//!   the CPU ([`env`]): a diffuse irradiance map `D(N) = 1/pi int L max(N.w, 0) dw` and, per
+//!   shininess `n`, a specular map `P_n(R) = int L (R.w)^n dw / int (R.w)^n dw`, both lat-long;
+//!   the renderers expand the sampled coefficients with the spectra per wavelength;
+//! - the sun is a directional light with irradiance `E_sun` (in units of `E`) and direction `l`;
+//! - an opaque surface reflects (Eq. 1, diffuse Lambertian, specular the normalised Phong lobe
+//!   so that the sun and the environment share one radiometric scale):
+//!   `I = k_d R_d(lambda) T_f [D(N) + E_sun max(N.l, 0) / pi]
+//!      + k_s' [P_n(R_v) + E_sun (n + 1) / (2 pi) max(R_v.l, 0)^n]`,
+//!   where, with a film, `k_s'` is the film's reflectance `R_f(theta_v, lambda)` and `T_f` its
+//!   transmittance (light reaching the pigment; both from [`crate::thinfilm`], unpolarised), and
+//!   without a film `k_s' = k_s`, `T_f = 1`;
+//! - a transparent surface (Eq. 9) is thin-walled: `I = R_f [P_n(R_v) + sun lobe] + T_f L(d)`,
+//!   `L(d)` the environment behind, along the view ray `d`;
+//! - `XYZ = sum_i w_i I(lambda_i) cmf(lambda_i) / sum_i w_i ybar(lambda_i)` by the chosen
+//!   integration rule (Eq. 10/11: a perfect white under the main light has Y = 1), then linear
+//!   RGB by the output space's matrix. No white balance: a scene under illuminant A looks warm.
+//!
+//! Both backends consume the same [`prepare::Prepared`] data (f32 spectra, maps and objects); the
+//! CPU computes in f64 with the thin-film module itself, the GPU in f32 with a WGSL port of it.
+
+pub mod cpu;
+pub mod env;
+pub mod gpu;
+pub mod image;
+pub mod prepare;
+pub mod presets;
+pub mod sweep;
+
+pub use self::image::{compare, Comparison, Image};
+pub use presets::Preset;
+
+use crate::colorimetry::{Observer, RgbSpace};
+use crate::error::{Error, Result};
+use crate::spectrum::{Rule, Tabulated, WavelengthGrid};
+use crate::thinfilm::{Layer, Material as Optical};
+use std::sync::Arc;
+
+/// The most layers a film may have on the GPU.
+pub const MAX_LAYERS: usize = 8;
+
+/// Where a ray goes: an orthographic window centred at `center`, `half_height` world units from
+/// the centre to the top edge (the width follows the image's aspect ratio).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct View {
+    pub center: [f64; 2],
+    pub half_height: f64,
+}
+
+/// A shape, all seen by an orthographic camera looking down −Z.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Shape {
+    Sphere {
+        center: [f64; 3],
+        radius: f64,
+    },
+    /// A cylinder with its axis along X, from `center.x - half_length` to `center.x + half_length`.
+    CylinderX {
+        center: [f64; 3],
+        radius: f64,
+        half_length: f64,
+    },
+    /// A rectangle facing +Z.
+    Quad {
+        center: [f64; 3],
+        half_size: [f64; 2],
+    },
+}
+
+/// Film thickness scaled linearly with world x: `scale(x)` goes from `s0` at `x0` to `s1` at
+/// `x1` (held beyond), multiplying every layer's thickness (the paper's Fig. 8).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Ramp {
+    pub x0: f64,
+    pub x1: f64,
+    pub s0: f64,
+    pub s1: f64,
+}
+
+impl Ramp {
+    pub fn scale(&self, x: f64) -> f64 {
+        let t = if self.x1 == self.x0 {
+            0.0
+        } else {
+            ((x - self.x0) / (self.x1 - self.x0)).clamp(0.0, 1.0)
+        };
+        self.s0 + (self.s1 - self.s0) * t
+    }
+}
+
+/// A multilayer film: ambient, layers from the ambient side, substrate (see [`crate::thinfilm`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Film {
+    pub ambient: Optical,
+    pub layers: Vec<Layer>,
+    pub substrate: Optical,
+}
+
+/// A surface's optical description.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Surface {
+    pub label: String,
+    /// `R_d(lambda)` of the pigment; None is black.
+    pub diffuse: Option<Tabulated>,
+    pub kd: f64,
+    /// Specular coefficient without a film (a film's reflectance replaces it).
+    pub ks: f64,
+    /// Phong exponent `n`.
+    pub shininess: f64,
+    pub film: Option<Film>,
+    /// Eq. 9: light from behind is transmitted through the film (requires a film).
+    pub transparent: bool,
+}
+
+/// One object: a shape, its surface, and which [`Lighting`] of the scene lights it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Object {
+    pub shape: Shape,
+    pub surface: Surface,
+    pub lighting: usize,
+    pub ramp: Option<Ramp>,
+    /// Whether the surface flags of `specmap render` (--film, --diffuse, --kd...) apply to it.
+    pub main: bool,
+}
+
+/// The environment's radiance, in coefficient space.
+#[derive(Debug, Clone)]
+pub enum Environment {
+    /// The same radiance in every direction: `radiance * E(lambda)`.
+    Uniform { radiance: f64 },
+    /// `sky * E` above the horizon, `ground * E` below, blended over `blend_deg` degrees of
+    /// elevation around it.
+    SkyGround {
+        sky: f64,
+        ground: f64,
+        blend_deg: f64,
+    },
+    /// A map in coefficient space (c_R, c_G, c_B on the basis, s on E), from a file.
+    Map(Arc<env::CoeffMap>),
+}
+
+/// A directional light: unit direction towards the light and irradiance at normal incidence in
+/// units of the lighting's `E` spectrum.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sun {
+    pub direction: [f64; 3],
+    pub irradiance: f64,
+}
+
+/// The light of (part of) a scene: the spectra its coefficients expand with, the environment and
+/// the sun.
+#[derive(Debug, Clone)]
+pub struct Lighting {
+    pub label: String,
+    /// The main light (the basis is `B_j = basis_reflectance_j * light`).
+    pub light: Tabulated,
+    /// The basis reflectances (the paper's ColorChecker red, green, blue).
+    pub basis_reflectance: [Tabulated; 3],
+    /// `E`, the SPD of the fourth coefficient: the sun's for a map, the main light's for a uniform
+    /// or sky-and-ground environment. On the render grid `B_j = MCC_j * light * k` with `k`
+    /// making the light Y = 1, and `E` is scaled to Y = 1 (as
+    /// [`crate::envmap::engine::Engine`] does).
+    pub e_spd: Tabulated,
+    /// Label of `e_spd`.
+    pub e_label: String,
+    pub environment: Environment,
+    pub sun: Option<Sun>,
+}
+
+impl Lighting {
+    /// A light by name (a table, `TABLE:COLUMN` or CSV), as the uniform environment with
+    /// `radiance` and optionally a sun of the same SPD.
+    pub fn uniform(light: &str, radiance: f64, sun: Option<Sun>) -> Result<Lighting> {
+        let l = crate::data::spectrum(light)?;
+        let basis = basis_reflectances()?;
+        Ok(Lighting {
+            label: l.label.clone(),
+            light: l.data.clone(),
+            basis_reflectance: basis,
+            e_spd: l.data,
+            e_label: l.label,
+            environment: Environment::Uniform { radiance },
+            sun,
+        })
+    }
+}
+
+/// The paper's basis reflectances (ColorChecker red, green, blue).
+pub fn basis_reflectances() -> Result<[Tabulated; 3]> {
+    let [a, b, c] = crate::fit::PAPER_BASIS.map(crate::data::spectrum);
+    Ok([a?.data, b?.data, c?.data])
+}
+
+/// A whole scene: image size, view, lightings, objects and the lighting of the background.
+#[derive(Debug, Clone)]
+pub struct Scene {
+    pub name: String,
+    pub width: usize,
+    pub height: usize,
+    pub view: View,
+    pub lightings: Vec<Lighting>,
+    pub objects: Vec<Object>,
+    /// The lighting whose environment is seen where rays miss.
+    pub background: usize,
+}
+
+/// How spectra become colours: grid, integration rule, observer, output RGB space.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Spectral {
+    pub grid: WavelengthGrid,
+    pub rule: Rule,
+    pub observer: Observer,
+    pub space: RgbSpace,
+}
+
+impl Spectral {
+    /// `samples` wavelengths evenly over 380..780 nm (at least 2).
+    pub fn samples(samples: usize) -> Result<Spectral> {
+        if samples < 2 {
+            return Err(Error::invalid(format!(
+                "{samples} wavelength sample(s): at least 2 are needed"
+            )));
+        }
+        Ok(Spectral {
+            grid: WavelengthGrid::new(380.0, 780.0, 400.0 / (samples - 1) as f64)?,
+            ..Spectral::default()
+        })
+    }
+    /// 380..780 nm at `step_nm` (the step must divide 400 nm).
+    pub fn step(step_nm: f64) -> Result<Spectral> {
+        Ok(Spectral {
+            grid: WavelengthGrid::new(380.0, 780.0, step_nm)?,
+            ..Spectral::default()
+        })
+    }
+}
+
+impl Default for Spectral {
+    /// 380..780 nm at 5 nm, Riemann (the paper's rule), CIE 1931, sRGB.
+    fn default() -> Self {
+        Spectral {
+            grid: WavelengthGrid::new(380.0, 780.0, 5.0).expect("a valid grid"),
+            rule: Rule::Riemann,
+            observer: Observer::Cie1931,
+            space: RgbSpace::SRGB,
+        }
+    }
+}
+
+/// Which renderer computes the image.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Backend {
+    Cpu,
+    Gpu,
+}
+
+impl std::fmt::Display for Backend {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Backend::Cpu => "cpu",
+            Backend::Gpu => "gpu",
+        })
+    }
+}
+
+impl Scene {
+    /// Checks the scene's consistency (indices, sizes, films) before any work is done.
+    pub fn validate(&self) -> Result<()> {
+        if self.width == 0 || self.height == 0 {
+            return Err(Error::invalid(format!(
+                "image size {}x{} is empty",
+                self.width, self.height
+            )));
+        }
+        if self.width > 16384 || self.height > 16384 {
+            return Err(Error::invalid(format!(
+                "image size {}x{}: at most 16384 pixels a side",
+                self.width, self.height
+            )));
+        }
+        if !(self.view.half_height.is_finite() && self.view.half_height > 0.0) {
+            return Err(Error::invalid("the view's half height must be positive"));
+        }
+        if self.lightings.is_empty() {
+            return Err(Error::invalid("a scene needs at least one lighting"));
+        }
+        if self.background >= self.lightings.len() {
+            return Err(Error::invalid("the background lighting does not exist"));
+        }
+        for (i, o) in self.objects.iter().enumerate() {
+            let s = &o.surface;
+            let what = format!("object {} ({})", i + 1, s.label);
+            if o.lighting >= self.lightings.len() {
+                return Err(Error::invalid(format!(
+                    "{what}: lighting {} does not exist",
+                    o.lighting
+                )));
+            }
+            if !(s.shininess.is_finite() && s.shininess >= 0.0 && s.shininess <= 1e5) {
+                return Err(Error::invalid(format!(
+                    "{what}: shininess {} must be between 0 and 1e5",
+                    s.shininess
+                )));
+            }
+            for (name, v) in [("kd", s.kd), ("ks", s.ks)] {
+                if !(v.is_finite() && v >= 0.0) {
+                    return Err(Error::invalid(format!("{what}: {name} {v} must be >= 0")));
+                }
+            }
+            if s.transparent && s.film.is_none() {
+                return Err(Error::invalid(format!(
+                    "{what}: a transparent surface needs a film (at least a substrate index)"
+                )));
+            }
+            if let Some(f) = &s.film {
+                if f.layers.len() > MAX_LAYERS {
+                    return Err(Error::invalid(format!(
+                        "{what}: {} layers; the renderer handles at most {MAX_LAYERS}",
+                        f.layers.len()
+                    )));
+                }
+            }
+            if let Some(r) = &o.ramp {
+                if ![r.x0, r.x1, r.s0, r.s1].iter().all(|v| v.is_finite())
+                    || r.s0 < 0.0
+                    || r.s1 < 0.0
+                {
+                    return Err(Error::invalid(format!("{what}: invalid thickness ramp")));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Renders on the CPU.
+    pub fn render_cpu(&self, spectral: &Spectral) -> Result<Image> {
+        let p = prepare::Prepared::new(self, spectral)?;
+        Ok(cpu::render(&p))
+    }
+}

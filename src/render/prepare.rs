@@ -1,0 +1,411 @@
+//! A scene flattened for rendering: spectra on the render grid, pre-filtered environment maps and
+//! objects, in the `#[repr(C)]` layout the WGSL shader declares. The CPU renderer reads the same
+//! arrays, so both backends see the same numbers.
+
+use super::env::{self, CoeffMap};
+use super::{Lighting, Scene, Shape, Spectral, MAX_LAYERS};
+use crate::colorimetry::{Cmfs, Observer};
+use crate::error::{Error, Result};
+use crate::spectrum::{Interpolation, Rule, Spectrum, WavelengthGrid};
+use crate::thinfilm::{Film, Index, Stack};
+use bytemuck::{Pod, Zeroable};
+
+/// Object kinds (`GpuObject::kind`).
+pub const SPHERE: u32 = 0;
+pub const CYLINDER_X: u32 = 1;
+pub const QUAD: u32 = 2;
+
+/// Material flags.
+pub const TRANSPARENT: u32 = 1;
+pub const HAS_FILM: u32 = 2;
+pub const HAS_DIFFUSE: u32 = 4;
+
+/// Frame constants (a uniform buffer).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+pub struct Params {
+    pub width: u32,
+    pub height: u32,
+    pub n_wl: u32,
+    pub n_objects: u32,
+    pub background: u32,
+    /// Offset in `spectra` of the weighted CMFs x, y, z (n_wl each).
+    pub cmf_offset: u32,
+    pub wl_offset: u32,
+    pub _pad: u32,
+    /// World x, y of the image centre, world size of a pixel, unused.
+    pub view: [f32; 4],
+    /// XYZ (Y = 1) -> linear RGB, rows (w unused).
+    pub rgb: [[f32; 4]; 3],
+}
+
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+pub struct GpuObject {
+    pub kind: u32,
+    pub material: u32,
+    pub lighting: u32,
+    /// Index in `maps` of the specular map for this object's shininess and lighting.
+    pub spec_map: u32,
+    /// Centre xyz, radius (quad: unused).
+    pub p0: [f32; 4],
+    /// Quad: half width, half height; cylinder: half length.
+    pub p1: [f32; 4],
+    /// Thickness ramp x0, x1, s0, s1.
+    pub ramp: [f32; 4],
+    /// [has_ramp, 0, 0, 0].
+    pub flags: [u32; 4],
+}
+
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+pub struct GpuMaterial {
+    pub flags: u32,
+    pub n_layers: u32,
+    /// Offset of R_d in `spectra`.
+    pub diffuse_offset: u32,
+    /// Offset of the film table: for medium m (0 ambient, 1..=L layers, L+1 substrate), n at
+    /// `film_offset + 2 m n_wl + i`, k at `film_offset + (2 m + 1) n_wl + i`.
+    pub film_offset: u32,
+    /// kd, ks, shininess, unused.
+    pub coef: [f32; 4],
+    /// Layer thicknesses in nm.
+    pub thickness: [[f32; 4]; 2],
+}
+
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+pub struct GpuLighting {
+    /// Offset of B_0; B_1, B_2 and E follow, n_wl apart.
+    pub spectra: u32,
+    pub diffuse_map: u32,
+    pub background_map: u32,
+    pub has_sun: u32,
+    /// Direction to the sun xyz, irradiance.
+    pub sun: [f32; 4],
+}
+
+/// The CPU's own copy of a film: the thin-film module's stack and its per-wavelength films.
+#[derive(Debug, Clone)]
+pub struct CpuFilm {
+    pub stack: Stack,
+    /// Per wavelength: ambient, layers, substrate indices.
+    pub indices: Vec<(Index, Vec<Index>, Index)>,
+    pub thickness_nm: Vec<f64>,
+    /// Per wavelength, at the nominal thicknesses.
+    pub films: Vec<Film<f64>>,
+}
+
+/// Everything both renderers read.
+#[derive(Debug, Clone)]
+pub struct Prepared {
+    pub params: Params,
+    pub spectra: Vec<f32>,
+    pub objects: Vec<GpuObject>,
+    pub materials: Vec<GpuMaterial>,
+    pub lightings: Vec<GpuLighting>,
+    /// [offset in texels, width, height, 0].
+    pub maps: Vec<[u32; 4]>,
+    pub texels: Vec<[f32; 4]>,
+    pub wavelengths_nm: Vec<f64>,
+    /// Per material (CPU only).
+    pub films: Vec<Option<CpuFilm>>,
+}
+
+/// Y of `s` on the grid: `sum w s ybar / sum w ybar`.
+fn luminance(s: &Spectrum, cmfs: &Cmfs, rule: Rule) -> Result<f64> {
+    Ok(s.try_mul(&cmfs.y)?.integrate(rule) / cmfs.y.integrate(rule))
+}
+
+/// The four spectra a lighting's coefficients expand with, on `grid`: `B_j = MCC_j * S * k` with
+/// `Y(S k) = 1`, and `E / Y(E)`.
+pub fn lighting_spectra(
+    l: &Lighting,
+    grid: &WavelengthGrid,
+    rule: Rule,
+    observer: Observer,
+) -> Result<[Vec<f64>; 4]> {
+    let cmfs = Cmfs::new(observer, grid)?;
+    let s = l.light.resample(grid, Interpolation::LIGHT);
+    let ys = luminance(&s, &cmfs, rule)?;
+    if !(ys.is_finite() && ys > 0.0) {
+        return Err(Error::invalid(format!(
+            "the light {} has no visible energy on the grid {grid}",
+            l.label
+        )));
+    }
+    let s = s.scaled(1.0 / ys);
+    let b = |j: usize| -> Result<Vec<f64>> {
+        Ok(l.basis_reflectance[j]
+            .resample(grid, Interpolation::SMOOTH)
+            .try_mul(&s)?
+            .values()
+            .to_vec())
+    };
+    let e = l.e_spd.resample(grid, Interpolation::LIGHT);
+    let ye = luminance(&e, &cmfs, rule)?;
+    if !(ye.is_finite() && ye > 0.0) {
+        return Err(Error::invalid(format!(
+            "the SPD {} has no visible energy on the grid {grid}",
+            l.e_label
+        )));
+    }
+    Ok([b(0)?, b(1)?, b(2)?, e.scaled(1.0 / ye).values().to_vec()])
+}
+
+fn offset(v: &[f32]) -> Result<u32> {
+    u32::try_from(v.len()).map_err(|_| Error::invalid("scene data exceeds 4 G values"))
+}
+
+fn push_map(maps: &mut Vec<[u32; 4]>, texels: &mut Vec<[f32; 4]>, m: &CoeffMap) -> u32 {
+    let i = maps.len() as u32;
+    maps.push([texels.len() as u32, m.width as u32, m.height as u32, 0]);
+    texels.extend_from_slice(&m.texels);
+    i
+}
+
+fn f4(v: [f64; 4]) -> [f32; 4] {
+    v.map(|x| x as f32)
+}
+
+impl Prepared {
+    /// Flattens `scene` for `spectral`: spectra on its grid, maps filtered per lighting and
+    /// shininess.
+    pub fn new(scene: &Scene, spectral: &Spectral) -> Result<Prepared> {
+        scene.validate()?;
+        let grid = spectral.grid;
+        let n = grid.len();
+        let wavelengths_nm: Vec<f64> = grid.wavelengths_nm().collect();
+        let mut spectra: Vec<f32> = Vec::new();
+
+        // Weighted CMFs: XYZ = sum_i cmf_w(i) I(i), a perfect white under a Y = 1 light -> Y = 1.
+        let cmfs = Cmfs::new(spectral.observer, &grid)?;
+        let w = spectral.rule.weights(n, grid.step_nm());
+        let norm: f64 = (0..n).map(|i| w[i] * cmfs.y.values()[i]).sum();
+        if norm.is_nan() || norm <= 0.0 {
+            return Err(Error::invalid(format!(
+                "the observer sees nothing on the grid {grid}"
+            )));
+        }
+        let cmf_offset = offset(&spectra)?;
+        for c in [&cmfs.x, &cmfs.y, &cmfs.z] {
+            spectra.extend((0..n).map(|i| (w[i] * c.values()[i] / norm) as f32));
+        }
+        let wl_offset = offset(&spectra)?;
+        spectra.extend(wavelengths_nm.iter().map(|&v| v as f32));
+
+        // Lightings and their maps.
+        let mut maps = Vec::new();
+        let mut texels = Vec::new();
+        let mut lightings = Vec::new();
+        let mut spec_index: Vec<Vec<(f64, u32)>> = Vec::new();
+        for (li, l) in scene.lightings.iter().enumerate() {
+            let sp = lighting_spectra(l, &grid, spectral.rule, spectral.observer)?;
+            let off = offset(&spectra)?;
+            for s in &sp {
+                spectra.extend(s.iter().map(|&v| v as f32));
+            }
+            let mut shininess: Vec<f64> = Vec::new();
+            for o in scene.objects.iter().filter(|o| o.lighting == li) {
+                if !shininess.contains(&o.surface.shininess) {
+                    shininess.push(o.surface.shininess);
+                }
+            }
+            let f = env::prefilter(&l.environment, &shininess);
+            let background_map = push_map(&mut maps, &mut texels, &f.background);
+            let diffuse_map = push_map(&mut maps, &mut texels, &f.diffuse);
+            spec_index.push(
+                f.specular
+                    .iter()
+                    .map(|(s, m)| (*s, push_map(&mut maps, &mut texels, m)))
+                    .collect(),
+            );
+            let (has_sun, sun) = match l.sun {
+                Some(s) => {
+                    let d = s.direction;
+                    let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+                    if !(len > 0.0 && len.is_finite() && s.irradiance.is_finite()) {
+                        return Err(Error::invalid(format!(
+                            "lighting {}: the sun needs a direction and a finite irradiance",
+                            l.label
+                        )));
+                    }
+                    (1, f4([d[0] / len, d[1] / len, d[2] / len, s.irradiance]))
+                }
+                None => (0, [0.0; 4]),
+            };
+            lightings.push(GpuLighting {
+                spectra: off,
+                diffuse_map,
+                background_map,
+                has_sun,
+                sun,
+            });
+        }
+        if texels.len() > u32::MAX as usize {
+            return Err(Error::invalid("environment maps exceed 4 G texels"));
+        }
+
+        // Materials (one per object) and objects.
+        let mut materials = Vec::new();
+        let mut films = Vec::new();
+        let mut objects = Vec::new();
+        for (oi, o) in scene.objects.iter().enumerate() {
+            let s = &o.surface;
+            let mut flags = 0;
+            let mut diffuse_offset = 0;
+            if let Some(rd) = &s.diffuse {
+                flags |= HAS_DIFFUSE;
+                diffuse_offset = offset(&spectra)?;
+                let r = rd.resample(&grid, Interpolation::SMOOTH);
+                spectra.extend(r.values().iter().map(|&v| v as f32));
+            }
+            if s.transparent {
+                flags |= TRANSPARENT;
+            }
+            let mut film_offset = 0;
+            let mut thickness = [[0f32; 4]; 2];
+            let mut n_layers = 0;
+            let mut cpu_film = None;
+            if let Some(f) = &s.film {
+                flags |= HAS_FILM;
+                n_layers = f.layers.len();
+                let what =
+                    |e: Error| Error::invalid(format!("object {} ({}): {e}", oi + 1, s.label));
+                let indices: Vec<(Index, Vec<Index>, Index)> = wavelengths_nm
+                    .iter()
+                    .map(|&wl| -> Result<_> {
+                        Ok((
+                            f.ambient.index_at(wl)?,
+                            f.layers
+                                .iter()
+                                .map(|l| l.material().index_at(wl))
+                                .collect::<Result<Vec<_>>>()?,
+                            f.substrate.index_at(wl)?,
+                        ))
+                    })
+                    .collect::<Result<_>>()
+                    .map_err(what)?;
+                if let Some(bad) = indices.iter().find(|(a, _, _)| a.k() != 0.0) {
+                    return Err(what(Error::invalid(format!(
+                        "the ambient medium must be transparent (index {})",
+                        bad.0
+                    ))));
+                }
+                film_offset = offset(&spectra)?;
+                for m in 0..n_layers + 2 {
+                    let idx = |i: usize| {
+                        let (a, l, s) = &indices[i];
+                        if m == 0 {
+                            *a
+                        } else if m == n_layers + 1 {
+                            *s
+                        } else {
+                            l[m - 1]
+                        }
+                    };
+                    spectra.extend((0..n).map(|i| idx(i).n() as f32));
+                    spectra.extend((0..n).map(|i| idx(i).k() as f32));
+                }
+                let t: Vec<f64> = f.layers.iter().map(|l| l.thickness_nm()).collect();
+                for (k, d) in t.iter().enumerate() {
+                    thickness[k / 4][k % 4] = *d as f32;
+                }
+                let stack = Stack::new(f.ambient.clone(), f.layers.clone(), f.substrate.clone());
+                let fl = wavelengths_nm
+                    .iter()
+                    .map(|&wl| stack.at::<f64>(wl))
+                    .collect::<Result<Vec<_>>>()
+                    .map_err(what)?;
+                cpu_film = Some(CpuFilm {
+                    stack,
+                    indices,
+                    thickness_nm: t,
+                    films: fl,
+                });
+            }
+            debug_assert!(n_layers <= MAX_LAYERS);
+            materials.push(GpuMaterial {
+                flags,
+                n_layers: n_layers as u32,
+                diffuse_offset,
+                film_offset,
+                coef: [s.kd as f32, s.ks as f32, s.shininess as f32, 0.0],
+                thickness,
+            });
+            films.push(cpu_film);
+            let spec_map = spec_index[o.lighting]
+                .iter()
+                .find(|(sh, _)| *sh == s.shininess)
+                .map(|(_, m)| *m)
+                .unwrap_or(lightings[o.lighting].background_map);
+            let (kind, p0, p1) = match o.shape {
+                Shape::Sphere { center, radius } => {
+                    (SPHERE, [center[0], center[1], center[2], radius], [0.0; 4])
+                }
+                Shape::CylinderX {
+                    center,
+                    radius,
+                    half_length,
+                } => (
+                    CYLINDER_X,
+                    [center[0], center[1], center[2], radius],
+                    [half_length, 0.0, 0.0, 0.0],
+                ),
+                Shape::Quad { center, half_size } => (
+                    QUAD,
+                    [center[0], center[1], center[2], 0.0],
+                    [half_size[0], half_size[1], 0.0, 0.0],
+                ),
+            };
+            let (ramp, has_ramp) = match o.ramp {
+                Some(r) => ([r.x0, r.x1, r.s0, r.s1], 1),
+                None => ([0.0, 1.0, 1.0, 1.0], 0),
+            };
+            objects.push(GpuObject {
+                kind,
+                material: oi as u32,
+                lighting: o.lighting as u32,
+                spec_map,
+                p0: f4(p0),
+                p1: f4(p1),
+                ramp: f4(ramp),
+                flags: [has_ramp, 0, 0, 0],
+            });
+        }
+        if spectra.len() > u32::MAX as usize {
+            return Err(Error::invalid("spectral data exceeds 4 G values"));
+        }
+        let m = spectral.space.from_xyz_matrix();
+        let row = |r: usize| [m[(r, 0)] as f32, m[(r, 1)] as f32, m[(r, 2)] as f32, 0.0];
+        let pixel = 2.0 * scene.view.half_height / scene.height as f64;
+        let params = Params {
+            width: scene.width as u32,
+            height: scene.height as u32,
+            n_wl: n as u32,
+            n_objects: objects.len() as u32,
+            background: scene.background as u32,
+            cmf_offset,
+            wl_offset,
+            _pad: 0,
+            view: [
+                scene.view.center[0] as f32,
+                scene.view.center[1] as f32,
+                pixel as f32,
+                0.0,
+            ],
+            rgb: [row(0), row(1), row(2)],
+        };
+        Ok(Prepared {
+            params,
+            spectra,
+            objects,
+            materials,
+            lightings,
+            maps,
+            texels,
+            wavelengths_nm,
+            films,
+        })
+    }
+}

@@ -1,0 +1,367 @@
+//! Scene presets that reproduce the paper's figures 6-9.
+
+use super::{Environment, Film, Lighting, Object, Ramp, Scene, Shape, Sun, Surface, View};
+use crate::colorimetry::{Cmfs, Observer};
+use crate::error::{Error, Result};
+use crate::spectrum::{Interpolation, Tabulated, WavelengthGrid};
+use crate::thinfilm::{Index, Layer, Material as Optical};
+
+/// The paper's figures.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Preset {
+    /// Fig. 6: chrome-oxide film (n = 2.7, 270 nm) on black plastic (n = 1.45).
+    Ball,
+    /// Fig. 7: transparent plastic (1.45) with a TiO2 film (2.3), 150 nm (left) and 350 nm.
+    TransparentBall,
+    /// Fig. 8: chrome oxide on plastic, thickness rising from 100 nm (left) to 400 nm (right).
+    Cylinders,
+    /// Fig. 9: ColorChecker patches and plastic spheres under D65, A and low-pressure sodium.
+    Chart,
+}
+
+impl Preset {
+    pub const ALL: [Preset; 4] = [
+        Preset::Ball,
+        Preset::TransparentBall,
+        Preset::Cylinders,
+        Preset::Chart,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Preset::Ball => "ball",
+            Preset::TransparentBall => "transparent-ball",
+            Preset::Cylinders => "cylinders",
+            Preset::Chart => "chart",
+        }
+    }
+
+    /// The image size the figure is framed for (width, height).
+    pub fn default_size(self) -> (usize, usize) {
+        match self {
+            Preset::Ball | Preset::Cylinders => (512, 512),
+            Preset::TransparentBall => (768, 384),
+            Preset::Chart => (768, 512),
+        }
+    }
+
+    /// The lights of the chart's rows, top to bottom.
+    pub const CHART_LIGHTS: [&'static str; 3] = ["D65", "A", "lps"];
+
+    /// Builds the scene. `lighting` replaces the preset's light (ignored by `chart`, which
+    /// compares its three lights); None: the uniform light `light` (D65 by default) with a
+    /// key light of the same SPD.
+    pub fn scene(
+        self,
+        width: usize,
+        height: usize,
+        light: &str,
+        lighting: Option<Lighting>,
+    ) -> Result<Scene> {
+        let key = key_light();
+        let main_light = |radiance: f64| -> Result<Lighting> {
+            match &lighting {
+                Some(l) => Ok(l.clone()),
+                None => Lighting::uniform(light, radiance, Some(key)),
+            }
+        };
+        let black_plastic = Tabulated::new(vec![380.0, 780.0], vec![0.02, 0.02])?;
+        let film = |layers: &[(f64, f64)], substrate: f64| -> Result<Film> {
+            Ok(Film {
+                ambient: Optical::constant(Index::real(1.0)?),
+                layers: layers
+                    .iter()
+                    .map(|&(n, d)| Layer::new(Optical::constant(Index::real(n)?), d))
+                    .collect::<Result<_>>()?,
+                substrate: Optical::constant(Index::real(substrate)?),
+            })
+        };
+        let filmed = |label: &str, f: Film, transparent: bool| Surface {
+            label: label.into(),
+            diffuse: (!transparent).then(|| black_plastic.clone()),
+            kd: if transparent { 0.0 } else { 1.0 },
+            ks: 0.0,
+            shininess: 200.0,
+            film: Some(f),
+            transparent,
+        };
+        let object = |shape: Shape, surface: Surface, lighting: usize| Object {
+            shape,
+            surface,
+            lighting,
+            ramp: None,
+            main: true,
+        };
+        let (objects, lightings, view) = match self {
+            Preset::Ball => (
+                vec![object(
+                    Shape::Sphere {
+                        center: [0.0, 0.0, 0.0],
+                        radius: 1.0,
+                    },
+                    filmed(
+                        "chrome oxide 270 nm on black plastic",
+                        film(&[(2.7, 270.0)], 1.45)?,
+                        false,
+                    ),
+                    0,
+                )],
+                vec![main_light(1.0)?],
+                View {
+                    center: [0.0, 0.0],
+                    half_height: 1.15,
+                },
+            ),
+            Preset::TransparentBall => {
+                let mut l = main_light(1.0)?;
+                if lighting.is_none() {
+                    // A lossless film in a uniform light is invisible (R + T = 1): a bright sky
+                    // over a dark floor shows the film in reflection and in transmission.
+                    l.environment = Environment::SkyGround {
+                        sky: 1.0,
+                        ground: 0.05,
+                        blend_deg: 10.0,
+                    };
+                }
+                (
+                    vec![
+                        object(
+                            Shape::Sphere {
+                                center: [-1.0, 0.0, 0.0],
+                                radius: 0.9,
+                            },
+                            filmed(
+                                "TiO2 150 nm on clear plastic",
+                                film(&[(2.3, 150.0)], 1.45)?,
+                                true,
+                            ),
+                            0,
+                        ),
+                        object(
+                            Shape::Sphere {
+                                center: [1.0, 0.0, 0.0],
+                                radius: 0.9,
+                            },
+                            filmed(
+                                "TiO2 350 nm on clear plastic",
+                                film(&[(2.3, 350.0)], 1.45)?,
+                                true,
+                            ),
+                            0,
+                        ),
+                    ],
+                    vec![l],
+                    View {
+                        center: [0.0, 0.0],
+                        half_height: 1.0,
+                    },
+                )
+            }
+            Preset::Cylinders => {
+                let objects = [0.62, 0.0, -0.62]
+                    .iter()
+                    .map(|&y| -> Result<Object> {
+                        let mut o = object(
+                            Shape::CylinderX {
+                                center: [0.0, y, 0.0],
+                                radius: 0.28,
+                                half_length: 0.95,
+                            },
+                            filmed(
+                                "chrome oxide 100-400 nm on black plastic",
+                                film(&[(2.7, 100.0)], 1.45)?,
+                                false,
+                            ),
+                            0,
+                        );
+                        o.ramp = Some(Ramp {
+                            x0: -0.95,
+                            x1: 0.95,
+                            s0: 1.0,
+                            s1: 4.0,
+                        });
+                        Ok(o)
+                    })
+                    .collect::<Result<Vec<_>>>()?;
+                (
+                    objects,
+                    vec![main_light(1.0)?],
+                    View {
+                        center: [0.0, 0.0],
+                        half_height: 1.0,
+                    },
+                )
+            }
+            Preset::Chart => chart()?,
+        };
+        Ok(Scene {
+            name: self.name().into(),
+            width,
+            height,
+            view,
+            lightings,
+            objects,
+            background: 0,
+        })
+    }
+}
+
+/// The key light of the presets: from the upper left, in front.
+pub fn key_light_direction() -> [f64; 3] {
+    let d: [f64; 3] = [-0.5, 0.6, 0.62];
+    let n = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+    d.map(|c| c / n)
+}
+
+fn key_light() -> Sun {
+    Sun {
+        direction: key_light_direction(),
+        irradiance: 1.5,
+    }
+}
+
+/// Fig. 9: per row (D65, A, LPS), the 24 ColorChecker patches and three plastic spheres: red,
+/// neutral 5, and a metamer of neutral 5 under D65 (same colour under D65, not under the
+/// others). A patch facing the camera gets exactly the light's radiance (uniform 0.5 plus a key
+/// light adding 0.5 at the patches' normal), so its colour is `specmap color colorchecker:<patch>
+/// --under <light>`.
+fn chart() -> Result<(Vec<Object>, Vec<Lighting>, View)> {
+    let cc = crate::data::Table::builtin("colorchecker")?;
+    let names: Vec<String> = cc.columns().to_vec();
+    let l = key_light_direction();
+    let mut objects = Vec::new();
+    let mut lightings = Vec::new();
+    let grey = cc.column("neutral-5")?;
+    let metamer = d65_metamer(&grey)?;
+    for (r, light) in Preset::CHART_LIGHTS.iter().enumerate() {
+        let sun = Sun {
+            direction: l,
+            irradiance: 0.5 * std::f64::consts::PI / l[2],
+        };
+        lightings.push(Lighting::uniform(light, 0.5, Some(sun))?);
+        let y = 1.0 - r as f64;
+        let plain = |label: String, rd: Tabulated, ks: f64| Surface {
+            label,
+            diffuse: Some(rd),
+            kd: 1.0,
+            ks,
+            shininess: 60.0,
+            film: None,
+            transparent: false,
+        };
+        objects.push(Object {
+            shape: Shape::Quad {
+                center: [0.0, y, -1.0],
+                half_size: [2.6, 0.5],
+            },
+            surface: plain(
+                "backdrop".into(),
+                Tabulated::new(vec![380.0, 780.0], vec![0.08, 0.08])?,
+                0.0,
+            ),
+            lighting: r,
+            ramp: None,
+            main: false,
+        });
+        for (k, name) in names.iter().enumerate() {
+            let (col, row) = (k % 6, k / 6);
+            let pitch = 0.23;
+            objects.push(Object {
+                shape: Shape::Quad {
+                    center: [
+                        -1.2 + (col as f64 - 2.5) * pitch,
+                        y + (1.5 - row as f64) * pitch,
+                        0.0,
+                    ],
+                    half_size: [0.1, 0.1],
+                },
+                surface: plain(format!("colorchecker:{name}"), cc.column(name)?, 0.0),
+                lighting: r,
+                ramp: None,
+                main: false,
+            });
+        }
+        for (k, (label, rd)) in [
+            ("plastic colorchecker:red", cc.column("red")?),
+            ("plastic colorchecker:neutral-5", grey.clone()),
+            ("plastic D65 metamer of neutral-5", metamer.clone()),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            objects.push(Object {
+                shape: Shape::Sphere {
+                    center: [0.2 + 0.7 * k as f64, y, 0.0],
+                    radius: 0.3,
+                },
+                surface: plain(label.into(), rd, 0.04),
+                lighting: r,
+                ramp: None,
+                main: true,
+            });
+        }
+    }
+    Ok((
+        objects,
+        lightings,
+        View {
+            center: [0.0, 0.0],
+            half_height: 1.5,
+        },
+    ))
+}
+
+/// A reflectance with the same CIE 1931 XYZ as `r` under D65 (at 1 nm, Riemann) but a different
+/// spectrum: `r` plus a metameric black (a smooth wave with its D65 x, y, z components removed),
+/// scaled to stay within [0.01, 0.99].
+pub fn d65_metamer(r: &Tabulated) -> Result<Tabulated> {
+    let grid = WavelengthGrid::visible_1nm();
+    let cmfs = Cmfs::new(Observer::Cie1931, &grid)?;
+    let d65 = crate::data::spectrum("D65")?
+        .data
+        .resample(&grid, Interpolation::LIGHT);
+    let base = r.resample(&grid, Interpolation::SMOOTH);
+    let a: Vec<Vec<f64>> = [&cmfs.x, &cmfs.y, &cmfs.z]
+        .iter()
+        .map(|c| {
+            c.values()
+                .iter()
+                .zip(d65.values())
+                .map(|(c, s)| c * s)
+                .collect()
+        })
+        .collect();
+    let wave: Vec<f64> = grid
+        .wavelengths_nm()
+        .map(|w| (2.0 * std::f64::consts::PI * (w - 380.0) / 160.0).sin())
+        .collect();
+    let dot = |u: &[f64], v: &[f64]| u.iter().zip(v).map(|(a, b)| a * b).sum::<f64>();
+    let g = nalgebra::Matrix3::from_fn(|i, j| dot(&a[i], &a[j]));
+    let rhs = nalgebra::Vector3::from_fn(|i, _| dot(&a[i], &wave));
+    let coef = g
+        .try_inverse()
+        .ok_or_else(|| Error::invalid("the D65 colour-matching vectors are dependent"))?
+        * rhs;
+    let black: Vec<f64> = (0..grid.len())
+        .map(|i| wave[i] - (0..3).map(|c| coef[c] * a[c][i]).sum::<f64>())
+        .collect();
+    // The largest scale keeping base + s * black within [0.01, 0.99].
+    let mut s = f64::INFINITY;
+    for (b, k) in base.values().iter().zip(&black) {
+        if *k > 0.0 {
+            s = s.min((0.99 - b) / k);
+        } else if *k < 0.0 {
+            s = s.min((b - 0.01) / -k);
+        }
+    }
+    let s = 0.9 * s.max(0.0);
+    Tabulated::new(
+        grid.wavelengths_nm().collect(),
+        base.values()
+            .iter()
+            .zip(&black)
+            .map(|(b, k)| b + s * k)
+            .collect(),
+    )
+}

@@ -1,0 +1,197 @@
+//! The speed-for-accuracy curve: one scene rendered at several wavelength counts on one backend,
+//! each frame timed and compared (CIEDE2000) with the 1 nm render of the same backend.
+
+use super::gpu::Gpu;
+use super::prepare::Prepared;
+use super::{compare, cpu, Backend, Image, Scene, Spectral};
+use crate::error::{Error, Result};
+use crate::plot::{self, Figure, Series};
+use std::path::Path;
+use std::time::Instant;
+
+/// The reference: 380..780 nm at 1 nm.
+pub const REFERENCE_STEP_NM: f64 = 1.0;
+
+/// One wavelength count.
+#[derive(Debug, Clone, Copy, serde::Serialize)]
+pub struct SweepRow {
+    pub samples: usize,
+    pub step_nm: f64,
+    /// The fastest of the repeats: CPU render, or GPU dispatch until idle.
+    pub frame_ms: f64,
+    /// GPU only: with upload and readback.
+    pub frame_with_transfers_ms: Option<f64>,
+    #[serde(rename = "mean_dE2000")]
+    pub mean_de2000: f64,
+    #[serde(rename = "p99_dE2000")]
+    pub p99_de2000: f64,
+    #[serde(rename = "max_dE2000")]
+    pub max_de2000: f64,
+}
+
+/// A measured curve.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct SweepReport {
+    pub scene: String,
+    pub width: usize,
+    pub height: usize,
+    pub backend: Backend,
+    pub adapter: Option<String>,
+    pub repeats: usize,
+    pub reference_step_nm: f64,
+    pub reference_frame_ms: f64,
+    pub rows: Vec<SweepRow>,
+}
+
+fn frame(
+    p: &Prepared,
+    backend: Backend,
+    gpu: Option<&Gpu>,
+    repeats: usize,
+) -> Result<(Image, f64, Option<f64>)> {
+    let mut best = f64::INFINITY;
+    let mut best_total = f64::INFINITY;
+    let mut img = None;
+    for _ in 0..repeats.max(1) {
+        match backend {
+            Backend::Cpu => {
+                let t = Instant::now();
+                let i = cpu::render(p);
+                best = best.min(t.elapsed().as_secs_f64());
+                img = Some(i);
+            }
+            Backend::Gpu => {
+                let g = gpu.ok_or_else(|| Error::invalid("the GPU sweep needs a GPU"))?;
+                let (i, t) = g.render(p)?;
+                best = best.min(t.compute_s);
+                best_total = best_total.min(t.upload_s + t.compute_s + t.readback_s);
+                img = Some(i);
+            }
+        }
+    }
+    let img = img.expect("at least one repeat");
+    Ok((
+        img,
+        best * 1e3,
+        (backend == Backend::Gpu).then_some(best_total * 1e3),
+    ))
+}
+
+/// Renders `scene` at each count of `samples` (wavelengths over 380..780 nm) and at 1 nm.
+pub fn sweep(
+    scene: &Scene,
+    base: &Spectral,
+    samples: &[usize],
+    backend: Backend,
+    gpu: Option<&Gpu>,
+    repeats: usize,
+) -> Result<SweepReport> {
+    let reference = Spectral {
+        grid: Spectral::step(REFERENCE_STEP_NM)?.grid,
+        ..*base
+    };
+    let p = Prepared::new(scene, &reference)?;
+    let (ref_img, ref_ms, _) = frame(&p, backend, gpu, 1)?;
+    let mut rows = Vec::new();
+    for &n in samples {
+        let sp = Spectral {
+            grid: Spectral::samples(n)?.grid,
+            ..*base
+        };
+        let p = Prepared::new(scene, &sp)?;
+        let (img, ms, total) = frame(&p, backend, gpu, repeats)?;
+        let c = compare(&ref_img, &img, &base.space)?;
+        rows.push(SweepRow {
+            samples: n,
+            step_nm: sp.grid.step_nm(),
+            frame_ms: ms,
+            frame_with_transfers_ms: total,
+            mean_de2000: c.mean,
+            p99_de2000: c.p99,
+            max_de2000: c.max,
+        });
+    }
+    Ok(SweepReport {
+        scene: scene.name.clone(),
+        width: scene.width,
+        height: scene.height,
+        backend,
+        adapter: gpu
+            .filter(|_| backend == Backend::Gpu)
+            .map(|g| g.adapter().name),
+        repeats,
+        reference_step_nm: REFERENCE_STEP_NM,
+        reference_frame_ms: ref_ms,
+        rows,
+    })
+}
+
+/// A markdown table of one or more curves.
+pub fn markdown(reports: &[SweepReport]) -> String {
+    let mut s = String::from(
+        "| backend | adapter | wavelengths | step (nm) | frame (ms) | mean dE2000 | p99 dE2000 | max dE2000 |\n\
+         |---|---|---:|---:|---:|---:|---:|---:|\n",
+    );
+    for r in reports {
+        for row in &r.rows {
+            s.push_str(&format!(
+                "| {} | {} | {} | {:.3} | {:.1} | {:.3} | {:.3} | {:.3} |\n",
+                r.backend,
+                r.adapter.as_deref().unwrap_or("-"),
+                row.samples,
+                row.step_nm,
+                row.frame_ms,
+                row.mean_de2000,
+                row.p99_de2000,
+                row.max_de2000
+            ));
+        }
+    }
+    s
+}
+
+/// Mean CIEDE2000 against frame time, one curve per report (PNG or SVG by extension).
+pub fn plot(reports: &[SweepReport], path: &Path) -> Result<()> {
+    let series = reports
+        .iter()
+        .enumerate()
+        .map(|(i, r)| Series {
+            label: format!(
+                "{} {}",
+                r.backend,
+                r.adapter
+                    .as_deref()
+                    .map(|a| format!("({a})"))
+                    .unwrap_or_default()
+            ),
+            points: r
+                .rows
+                .iter()
+                .map(|row| (row.frame_ms.max(1e-3).log10(), row.mean_de2000))
+                .collect(),
+            color: plot::palette(i),
+        })
+        .collect();
+    let r0 = reports
+        .first()
+        .ok_or_else(|| Error::invalid("no sweep to plot"))?;
+    plot::write(
+        &Figure {
+            title: format!(
+                "{} {}x{}: colour error vs frame time (points: {} wavelengths)",
+                r0.scene,
+                r0.width,
+                r0.height,
+                r0.rows
+                    .iter()
+                    .map(|r| r.samples.to_string())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+            x_label: "log10 frame time (ms)".into(),
+            y_label: "mean CIEDE2000 vs the 1 nm render".into(),
+            series,
+        },
+        path,
+    )
+}
