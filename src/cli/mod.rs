@@ -1,5 +1,6 @@
 //! Flag definitions and the dispatch to each command.
 
+mod bench;
 mod color;
 mod convert;
 mod data;
@@ -25,6 +26,7 @@ use specmap::spectrum::Rule;
 const AFTER_HELP: &str = "\
 Examples:
   specmap data list
+  specmap bench --quick --report bench/
   specmap data show D65 --range 380:780:5 --plot d65.png
   specmap color colorchecker:red --under D65 --json
   specmap color my_lamp.csv
@@ -47,6 +49,8 @@ pub struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// Colour error against time for every speed/accuracy knob: table, JSON and plots.
+    Bench(bench::BenchArgs),
     /// List, print and plot the built-in spectral tables (and user CSVs).
     #[command(subcommand)]
     Data(data::DataCommand),
@@ -68,6 +72,7 @@ enum Command {
 
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
+        Command::Bench(a) => bench::run(a),
         Command::Data(c) => data::run(c),
         Command::Color(a) => color::run(a),
         Command::Convert(a) => convert::run(*a),

@@ -123,7 +123,7 @@ impl From<SceneArg> for Preset {
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-enum BackendArg {
+pub(crate) enum BackendArg {
     /// the GPU when an adapter exists, else the CPU (with a one-line notice)
     Auto,
     /// wgpu compute; an error without an adapter
