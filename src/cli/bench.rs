@@ -384,15 +384,20 @@ fn log_de(v: f64) -> f64 {
     v.max(1e-6).log10()
 }
 
-/// Max error against time, one curve per case, for one rule (Riemann) of a section.
-fn error_time_figure(rows: &[Row], section: &str) -> Figure {
+/// The cases of a section, in order of appearance.
+fn cases<'a>(rows: &'a [Row], section: &str) -> Vec<&'a str> {
     let mut cases: Vec<&str> = Vec::new();
     for r in rows.iter().filter(|r| r.section == section) {
         if !cases.contains(&r.case.as_str()) {
             cases.push(&r.case);
         }
     }
-    let series = cases
+    cases
+}
+
+/// Max error against time, one curve per case, for one rule (Riemann) of a section.
+fn error_time_figure(rows: &[Row], section: &str) -> Figure {
+    let series = cases(rows, section)
         .iter()
         .enumerate()
         .map(|(i, case)| Series {
@@ -418,13 +423,7 @@ fn error_time_figure(rows: &[Row], section: &str) -> Figure {
 
 /// Film error against step, one curve per thickness and coherence.
 fn film_figure(rows: &[Row]) -> Figure {
-    let mut cases: Vec<&str> = Vec::new();
-    for r in rows.iter().filter(|r| r.section == "film") {
-        if !cases.contains(&r.case.as_str()) {
-            cases.push(&r.case);
-        }
-    }
-    let series = cases
+    let series = cases(rows, "film")
         .iter()
         .enumerate()
         .map(|(i, case)| Series {
