@@ -1,14 +1,37 @@
 //! The stability sweep: across angles 0-90 degrees, thicknesses 0-1 mm, indices 1-4 with k up to
 //! 10, every built-in light and HDR pixel values from 1e-8 to 1e6, no NaN or infinity anywhere in
 //! the fit, the conversion or the renderer. Where a result has a physical range it is checked too
-//! (0 <= R, T and R + T <= 1).
+//! (0 <= R, T and R + T <= 1). The renderer is swept on the CPU and, where an adapter exists, on
+//! the GPU.
 
 use specmap::colorimetry::{Observer, RgbSpace};
 use specmap::data::{self, Kind};
 use specmap::envmap::convert::{convert, ConvertOptions, LightSpec};
 use specmap::envmap::exrio::{read_spectral_rows, Precision};
 use specmap::fit::{self, FitInput, Mode, Upsampler, PAPER_BASIS};
+use specmap::render::gpu::Gpu;
+use specmap::render::prepare::Prepared;
 use specmap::render::{Preset, Spectral};
+use std::sync::OnceLock;
+
+/// The GPU when an adapter exists; a missing adapter fails when `SPECMAP_REQUIRE_GPU=1` (CI).
+fn gpu() -> Option<&'static Gpu> {
+    static GPU: OnceLock<Option<Gpu>> = OnceLock::new();
+    GPU.get_or_init(|| match Gpu::new() {
+        Ok(g) => Some(g),
+        Err(e) => {
+            assert!(
+                std::env::var("SPECMAP_REQUIRE_GPU").as_deref() != Ok("1"),
+                "SPECMAP_REQUIRE_GPU=1 but {e}"
+            );
+            eprintln!(
+                "notice: no GPU adapter, the stability sweep checks the CPU renderer only: {e}"
+            );
+            None
+        }
+    })
+    .as_ref()
+}
 use specmap::spectrum::{Rule, WavelengthGrid};
 use specmap::thinfilm::{Film, Incidence, Index, Layer, Material, Polarization};
 
@@ -209,6 +232,18 @@ fn renderer_stays_finite_for_extreme_films_and_grazing_views() {
                         .all(|v| v.is_finite() && *v >= -1e-4),
                     "{preset:?} n {n}+{k}i d {d}"
                 );
+                // The GPU's f32 shader on the same scene, where an adapter exists.
+                if let Some(g) = gpu() {
+                    let p = Prepared::new(&scene, &spectral).unwrap();
+                    let (img, _) = g.render(&p).unwrap();
+                    assert!(
+                        img.pixels
+                            .iter()
+                            .flatten()
+                            .all(|v| v.is_finite() && *v >= -1e-3),
+                        "GPU {preset:?} n {n}+{k}i d {d}"
+                    );
+                }
             }
         }
     }
