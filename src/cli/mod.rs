@@ -3,6 +3,7 @@
 mod color;
 mod convert;
 mod data;
+mod demo;
 mod fit;
 mod render;
 mod rendition;
@@ -24,6 +25,7 @@ use specmap::spectrum::Rule;
 
 const AFTER_HELP: &str = "\
 Examples:
+  specmap demo -o out/demo          # the whole pipeline as one HTML page (no GPU needed)
   specmap data list
   specmap data show D65 --range 380:780:5 --plot d65.png
   specmap color colorchecker:red --under D65 --json
@@ -47,6 +49,8 @@ pub struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// The whole pipeline on the bundled map as one HTML page: fit, convert, render, trade-off.
+    Demo(demo::DemoArgs),
     /// List, print and plot the built-in spectral tables (and user CSVs).
     #[command(subcommand)]
     Data(data::DataCommand),
@@ -68,6 +72,7 @@ enum Command {
 
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
+        Command::Demo(a) => demo::run(a),
         Command::Data(c) => data::run(c),
         Command::Color(a) => color::run(a),
         Command::Convert(a) => convert::run(*a),
