@@ -190,12 +190,37 @@ pub fn run(a: DemoArgs) -> anyhow::Result<()> {
             dir.display()
         );
     }
-    std::fs::create_dir_all(&dir)
-        .with_context(|| format!("creating the output folder {}", dir.display()))?;
     let sizes = Sizes::new(a.quick);
     let out = |name: &str| dir.join(name);
     let shown = |name: &str| sh(&out(name).display().to_string());
     let mut seconds = Vec::new();
+
+    // The renderer first: --backend gpu without an adapter fails before any work.
+    let (gpu, renderer) = match a.backend {
+        BackendArg::Cpu => (None, "CPU (--backend cpu)".to_string()),
+        BackendArg::Gpu => {
+            let g = Gpu::new().context("--backend gpu")?;
+            let name = adapter_name(&g);
+            (Some(g), name)
+        }
+        BackendArg::Auto => match Gpu::new() {
+            Ok(g) => {
+                let name = adapter_name(&g);
+                (Some(g), name)
+            }
+            Err(e) => {
+                let e = e.to_string();
+                eprintln!(
+                    "note: rendering on the CPU: {}",
+                    e.lines().next().unwrap_or_default()
+                );
+                (None, "CPU (no GPU adapter found)".to_string())
+            }
+        },
+    };
+    let adapter = gpu.as_ref().map(|g| g.adapter());
+    std::fs::create_dir_all(&dir)
+        .with_context(|| format!("creating the output folder {}", dir.display()))?;
 
     // 1. The paper's basis for D65 in the three modes.
     eprintln!("demo [1/5] fit: the paper's basis under D65, modes paper, exact and nonneg");
@@ -253,29 +278,6 @@ pub fn run(a: DemoArgs) -> anyhow::Result<()> {
 
     // 3. The four presets under the converted map (the chart has its own three lights).
     let t = Instant::now();
-    let (gpu, renderer) = match a.backend {
-        BackendArg::Cpu => (None, "CPU (--backend cpu)".to_string()),
-        BackendArg::Gpu => {
-            let g = Gpu::new().context("--backend gpu")?;
-            let name = adapter_name(&g);
-            (Some(g), name)
-        }
-        BackendArg::Auto => match Gpu::new() {
-            Ok(g) => {
-                let name = adapter_name(&g);
-                (Some(g), name)
-            }
-            Err(e) => {
-                let e = e.to_string();
-                eprintln!(
-                    "note: no GPU adapter found, rendering on the CPU: {}",
-                    e.lines().next().unwrap_or_default()
-                );
-                (None, "CPU (no GPU adapter found)".to_string())
-            }
-        },
-    };
-    let adapter = gpu.as_ref().map(|g| g.adapter());
     eprintln!(
         "demo [3/5] render: {} on {renderer}",
         Preset::ALL.map(|p| p.name()).join(", ")
@@ -561,11 +563,11 @@ fn convert_map(
 fn adapter_name(g: &Gpu) -> String {
     let a = g.adapter();
     format!(
-        "GPU adapter {} ({}{})",
+        "GPU adapter {} via {}{}",
         a.name,
         a.backend,
         if g.is_software() {
-            ", a software adapter running on the CPU"
+            " (software, on the CPU)"
         } else {
             ""
         }
