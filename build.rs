@@ -4,7 +4,10 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 fn main() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("spectra");
+    // Read at run time: env!() would bake in the checkout the build script was compiled in,
+    // and cargo reuses a compiled build script across checkouts that share a target folder.
+    let manifest = std::env::var("CARGO_MANIFEST_DIR").expect("cargo sets CARGO_MANIFEST_DIR");
+    let root = Path::new(&manifest).join("spectra");
     println!("cargo:rerun-if-changed={}", root.display());
     let mut entries = Vec::new();
     for kind in ["cmf", "illuminant", "light", "reflectance", "basis"] {

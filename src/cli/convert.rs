@@ -267,41 +267,8 @@ pub fn run(a: ConvertArgs) -> anyhow::Result<()> {
         r.condition_number,
         if r.regularized { " (reduced)" } else { "" }
     );
-    match &r.sun {
-        SunSearch::Found(s) => outln!(
-            out,
-            "  sun          {} pixels, elevation {:.1}°, azimuth {:.1}°, {:.2e} sr, {:.1}% of the \
-             energy, {}{} -> {}",
-            s.pixel_count,
-            s.elevation_deg,
-            s.azimuth_deg,
-            s.solid_angle_sr,
-            100.0 * s.energy_share,
-            s.cct
-                .kelvin
-                .map(|k| format!("CCT {k:.0} K"))
-                .unwrap_or_else(|| "no CCT".into()),
-            if s.clipped { ", clipped" } else { "" },
-            r.sun_spd.as_deref().unwrap_or("kept")
-        ),
-        SunSearch::NotFound { reason } => outln!(out, "  sun          none: {reason}"),
-    }
-    outln!(
-        out,
-        "  output       {} {}x{}, {} channels ({} wavelengths {}..{} nm), {}, {}{}, {:.1} MB",
-        r.output_layout.name(),
-        r.output_size[0],
-        r.output_size[1],
-        r.channels,
-        r.wavelengths_nm.len(),
-        r.wavelengths_nm.first().unwrap_or(&0.0),
-        r.wavelengths_nm.last().unwrap_or(&0.0),
-        r.precision,
-        r.compression,
-        r.ev.map(|e| format!(", values / 2^{e} (EV)"))
-            .unwrap_or_default(),
-        r.bytes as f64 / 1e6
-    );
+    outln!(out, "  sun          {}", sun_text(r));
+    outln!(out, "  output       {}", output_text(r));
     outln!(
         out,
         "  round trip   CIEDE2000 energy-weighted mean {:.4}, max {:.4}; without the sun: mean \
@@ -322,4 +289,45 @@ pub fn run(a: ConvertArgs) -> anyhow::Result<()> {
     );
     super::emit(&out);
     Ok(())
+}
+
+/// The sun line of the report: where it is, how much energy, the SPD it was given.
+pub(super) fn sun_text(r: &convert::ConvertReport) -> String {
+    match &r.sun {
+        SunSearch::Found(s) => format!(
+            "{} pixels, elevation {:.1}°, azimuth {:.1}°, {:.2e} sr, {:.1}% of the energy, {}{} -> \
+             {}",
+            s.pixel_count,
+            s.elevation_deg,
+            s.azimuth_deg,
+            s.solid_angle_sr,
+            100.0 * s.energy_share,
+            s.cct
+                .kelvin
+                .map(|k| format!("CCT {k:.0} K"))
+                .unwrap_or_else(|| "no CCT".into()),
+            if s.clipped { ", clipped" } else { "" },
+            r.sun_spd.as_deref().unwrap_or("kept")
+        ),
+        SunSearch::NotFound { reason } => format!("none: {reason}"),
+    }
+}
+
+/// The output line of the report: layout, size, channels, wavelengths, encoding, bytes.
+pub(super) fn output_text(r: &convert::ConvertReport) -> String {
+    format!(
+        "{} {}x{}, {} channels ({} wavelengths {}..{} nm), {}, {}{}, {:.1} MB",
+        r.output_layout.name(),
+        r.output_size[0],
+        r.output_size[1],
+        r.channels,
+        r.wavelengths_nm.len(),
+        r.wavelengths_nm.first().unwrap_or(&0.0),
+        r.wavelengths_nm.last().unwrap_or(&0.0),
+        r.precision,
+        r.compression,
+        r.ev.map(|e| format!(", values / 2^{e} (EV)"))
+            .unwrap_or_default(),
+        r.bytes as f64 / 1e6
+    )
 }

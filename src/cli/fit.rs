@@ -7,7 +7,7 @@ use specmap::colorimetry::{Observer, RgbSpace};
 use specmap::fit::{self, FitInput, Mode};
 use specmap::plot::{self, Figure, Series};
 use specmap::spectrum::Rule;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[derive(Debug, Args)]
 pub struct FitArgs {
@@ -108,52 +108,7 @@ pub fn run(a: FitArgs) -> anyhow::Result<()> {
         eprintln!("wrote {}", path.display());
     }
     if let Some(path) = &a.plot {
-        let grid = a.spectral.range;
-        let w: Vec<f64> = grid.wavelengths_nm().collect();
-        let max_light = f.light_spd.iter().cloned().fold(0.0, f64::max).max(1e-300);
-        let basis = f.weighted_basis();
-        let max_basis = basis
-            .iter()
-            .flatten()
-            .cloned()
-            .fold(0.0, f64::max)
-            .max(1e-300);
-        let mut series: Vec<Series> = ["R", "G", "B"]
-            .iter()
-            .zip(&basis)
-            .zip([[200, 30, 30], [30, 150, 30], [30, 60, 200]])
-            .zip(&f.basis)
-            .map(|(((c, b), color), label)| Series {
-                label: format!("w_{c} · {label} · {}", f.light),
-                points: w
-                    .iter()
-                    .copied()
-                    .zip(b.iter().map(|v| v / max_basis))
-                    .collect(),
-                color,
-            })
-            .collect();
-        series.push(Series {
-            label: format!("{} (scaled)", f.light),
-            points: w
-                .iter()
-                .copied()
-                .zip(f.light_spd.iter().map(|v| v / max_light))
-                .collect(),
-            color: [120, 120, 120],
-        });
-        plot::write(
-            &Figure {
-                title: format!(
-                    "Fitted basis under {} (w = {:.4}, {:.4}, {:.4})",
-                    f.light, f.weights[0], f.weights[1], f.weights[2]
-                ),
-                x_label: "Wavelength (nm)".into(),
-                y_label: "Relative spectral power".into(),
-                series,
-            },
-            path,
-        )?;
+        write_basis_plot(&f, path)?;
         eprintln!("wrote {}", path.display());
     }
 
@@ -260,6 +215,56 @@ pub fn run(a: FitArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// The plot of `specmap fit --plot`: the three weighted basis spectra and the light (.png, .svg).
+pub(super) fn write_basis_plot(f: &fit::Fit, path: &Path) -> anyhow::Result<()> {
+    let w: Vec<f64> = f.grid.wavelengths_nm().collect();
+    let max_light = f.light_spd.iter().cloned().fold(0.0, f64::max).max(1e-300);
+    let basis = f.weighted_basis();
+    let max_basis = basis
+        .iter()
+        .flatten()
+        .cloned()
+        .fold(0.0, f64::max)
+        .max(1e-300);
+    let mut series: Vec<Series> = ["R", "G", "B"]
+        .iter()
+        .zip(&basis)
+        .zip([[200, 30, 30], [30, 150, 30], [30, 60, 200]])
+        .zip(&f.basis)
+        .map(|(((c, b), color), label)| Series {
+            label: format!("w_{c} · {label} · {}", f.light),
+            points: w
+                .iter()
+                .copied()
+                .zip(b.iter().map(|v| v / max_basis))
+                .collect(),
+            color,
+        })
+        .collect();
+    series.push(Series {
+        label: format!("{} (scaled)", f.light),
+        points: w
+            .iter()
+            .copied()
+            .zip(f.light_spd.iter().map(|v| v / max_light))
+            .collect(),
+        color: [120, 120, 120],
+    });
+    plot::write(
+        &Figure {
+            title: format!(
+                "Fitted basis under {} (w = {:.4}, {:.4}, {:.4})",
+                f.light, f.weights[0], f.weights[1], f.weights[2]
+            ),
+            x_label: "Wavelength (nm)".into(),
+            y_label: "Relative spectral power".into(),
+            series,
+        },
+        path,
+    )?;
+    Ok(())
+}
+
 fn summary(f: &fit::Fit, rt: &fit::RoundTrip) -> serde_json::Value {
     serde_json::json!({
         "light": f.light,
@@ -304,7 +309,7 @@ fn table(fits: &[(fit::Fit, fit::RoundTrip)], json: bool) -> anyhow::Result<()> 
     Ok(())
 }
 
-fn mode_name(m: Mode) -> &'static str {
+pub(super) fn mode_name(m: Mode) -> &'static str {
     match m {
         Mode::Paper => "paper",
         Mode::Exact => "exact",

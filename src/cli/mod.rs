@@ -4,6 +4,7 @@ mod bench;
 mod color;
 mod convert;
 mod data;
+mod demo;
 mod fit;
 mod render;
 mod rendition;
@@ -25,8 +26,9 @@ use specmap::spectrum::Rule;
 
 const AFTER_HELP: &str = "\
 Examples:
-  specmap data list
+  specmap demo -o out/demo          # the whole pipeline as one HTML page (no GPU needed)
   specmap bench --quick --report bench/
+  specmap data list
   specmap data show D65 --range 380:780:5 --plot d65.png
   specmap color colorchecker:red --under D65 --json
   specmap color my_lamp.csv
@@ -49,6 +51,8 @@ pub struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// The whole pipeline on the bundled map as one HTML page: fit, convert, render, trade-off.
+    Demo(demo::DemoArgs),
     /// Colour error against time for every speed/accuracy knob: table, JSON and plots.
     Bench(bench::BenchArgs),
     /// List, print and plot the built-in spectral tables (and user CSVs).
@@ -72,6 +76,7 @@ enum Command {
 
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
+        Command::Demo(a) => demo::run(a),
         Command::Bench(a) => bench::run(a),
         Command::Data(c) => data::run(c),
         Command::Color(a) => color::run(a),

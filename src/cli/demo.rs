@@ -1,0 +1,651 @@
+//! `specmap demo`: the whole pipeline on the bundled defaults (fit, convert, render, speed for
+//! accuracy), written up as one self-contained HTML page with its images.
+//!
+//! Every step calls the library as the single-purpose commands do, and the page lists the
+//! command that reproduces each artefact.
+
+mod page;
+
+use super::fit::{mode_name, write_basis_plot};
+use anyhow::Context;
+use clap::{Args, ValueEnum};
+use specmap::colorimetry::{Cmfs, Observer, RgbSpace};
+use specmap::envmap::convert::{self, ConvertOptions, ConvertReport, LightSpec};
+use specmap::envmap::roundtrip::{round_trip_file, write_heatmap, FileRoundTrip};
+use specmap::fit::{self, FitInput, Mode};
+use specmap::render::gpu::{AdapterReport, Gpu};
+use specmap::render::prepare::Prepared;
+use specmap::render::{cpu, env, Backend, Preset, Spectral};
+use specmap::spectrum::{Rule, WavelengthGrid};
+use specmap::tradeoff::{self, Measurement, Reference};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// The map the demo converts and lights its renders with, relative to the repository root.
+const DEFAULT_ENV: &str = "envmaps/sunrise.exr";
+
+/// The lights of the speed-for-accuracy table (smooth, incandescent, fluorescent, LED, a line).
+const TRADEOFF_LIGHTS: [&str; 6] = ["D65", "A", "FL2", "FL11", "LED-B3", "lps"];
+
+/// CIEDE2000 shown as white in the round-trip heatmaps (`specmap roundtrip`'s default).
+const HEATMAP_MAX: f32 = 5.0;
+
+#[derive(Debug, Args)]
+#[command(after_help = "\
+Writes DIR/index.html with the fitted basis plot, the converted map's round-trip heatmaps, the
+four preset renders and the speed-for-accuracy table, and the command behind each of them.
+Open it in a browser. No GPU is needed: without an adapter the CPU renderer draws the images.
+
+Examples:
+  specmap demo
+  specmap demo -o /tmp/demo --quick
+  specmap demo --env envmaps/forest.exr --backend cpu --json")]
+pub struct DemoArgs {
+    /// Folder for index.html, its images and the converted maps (created if missing).
+    #[arg(short, long, value_name = "DIR", default_value = "out/demo")]
+    output: PathBuf,
+    /// The RGB environment map (OpenEXR or Radiance .hdr) to convert and light the renders with
+    /// [default: envmaps/sunrise.exr of the repository].
+    #[arg(long, value_name = "PATH")]
+    env: Option<PathBuf>,
+    /// Which renderer: the GPU if an adapter exists (auto), or one of them.
+    #[arg(long, value_enum, default_value_t = BackendArg::Auto)]
+    backend: BackendArg,
+    /// Small maps and images and fewer wavelength steps: a first look in a few seconds.
+    #[arg(long)]
+    quick: bool,
+    /// Machine-readable summary of what was written, on stdout.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum BackendArg {
+    /// the GPU when an adapter exists, else the CPU (with a one-line notice)
+    Auto,
+    /// wgpu compute; an error without an adapter
+    Gpu,
+    /// the rayon reference renderer
+    Cpu,
+}
+
+/// How big the demo's work is.
+struct Sizes {
+    /// Height of the converted lat-long map (None: the input's).
+    map: Option<usize>,
+    /// Height of the paper-mode copy.
+    paper_map: usize,
+    /// Divides every preset's image size.
+    shrink: usize,
+    /// Riemann steps of the trade-off table, finest first.
+    steps: &'static [f64],
+    /// Seconds each trade-off timing repeats for, at least.
+    min_seconds: f64,
+    /// Timings per grid, the fastest kept (the machine may be shared).
+    repeats: usize,
+}
+
+impl Sizes {
+    fn new(quick: bool) -> Sizes {
+        if quick {
+            Sizes {
+                // The sun is still one pixel of its own at 64 rows (at 32 it is not found).
+                map: Some(64),
+                paper_map: 64,
+                shrink: 4,
+                steps: &[5.0, 10.0, 20.0],
+                min_seconds: 0.002,
+                repeats: 1,
+            }
+        } else {
+            Sizes {
+                map: None,
+                paper_map: 256,
+                shrink: 1,
+                steps: &[1.0, 2.0, 5.0, 10.0, 20.0],
+                min_seconds: 0.02,
+                repeats: 3,
+            }
+        }
+    }
+
+    /// A preset's image size: its own aspect ratio, 256 pixels high (the chart's 384x256).
+    fn image(&self, p: Preset) -> (usize, usize) {
+        let (w, h) = match p {
+            Preset::Ball | Preset::Cylinders => (256, 256),
+            Preset::TransparentBall => (384, 192),
+            Preset::Chart => (384, 256),
+        };
+        (w / self.shrink, h / self.shrink)
+    }
+}
+
+/// One fitted mode and its round trip over the 17^3 RGB grid.
+pub(super) struct FitRow {
+    pub fit: fit::Fit,
+    pub round_trip: fit::RoundTrip,
+}
+
+/// A converted map and its file round trip.
+pub(super) struct Converted {
+    pub report: ConvertReport,
+    pub file: String,
+    pub round_trip: FileRoundTrip,
+    pub heatmap: String,
+    pub command: String,
+    pub roundtrip_command: String,
+}
+
+/// One rendered preset.
+pub(super) struct Render {
+    pub preset: Preset,
+    pub size: (usize, usize),
+    pub file: String,
+    pub backend: Backend,
+    pub seconds: f64,
+    pub command: String,
+}
+
+/// One row of the trade-off table: None where the grid misses the light's lines.
+pub(super) struct TradeoffRow {
+    pub light: String,
+    pub step_nm: f64,
+    pub samples: usize,
+    pub rule: Rule,
+    pub measurement: Option<Measurement>,
+}
+
+/// Everything the page shows.
+pub(super) struct Run {
+    pub quick: bool,
+    pub env: String,
+    pub dir: PathBuf,
+    pub fits: Vec<FitRow>,
+    pub basis_plot: String,
+    pub fit_commands: [String; 2],
+    pub converted: Converted,
+    pub paper: Converted,
+    pub renderer: String,
+    pub adapter: Option<AdapterReport>,
+    pub renders: Vec<Render>,
+    pub render_spectral: Spectral,
+    pub tradeoff: Vec<TradeoffRow>,
+    /// (step, seconds)
+    pub seconds: Vec<(&'static str, f64)>,
+    pub demo_command: String,
+}
+
+pub fn run(a: DemoArgs) -> anyhow::Result<()> {
+    let t_all = Instant::now();
+    let env_path = resolve_env(a.env.as_deref())?;
+    let env_str = env_path
+        .to_str()
+        .with_context(|| format!("{}: the path is not UTF-8", env_path.display()))?
+        .to_string();
+    let dir = a.output.clone();
+    if dir.exists() && !dir.is_dir() {
+        anyhow::bail!(
+            "-o {}: exists and is not a folder; the demo writes index.html and its images into a \
+             folder",
+            dir.display()
+        );
+    }
+    let sizes = Sizes::new(a.quick);
+    let out = |name: &str| dir.join(name);
+    let shown = |name: &str| sh(&out(name).display().to_string());
+    let mut seconds = Vec::new();
+
+    // The renderer first: --backend gpu without an adapter fails before any work.
+    let (gpu, renderer) = match a.backend {
+        BackendArg::Cpu => (None, "CPU (--backend cpu)".to_string()),
+        BackendArg::Gpu => {
+            let g = Gpu::new().context("--backend gpu")?;
+            let name = adapter_name(&g);
+            (Some(g), name)
+        }
+        BackendArg::Auto => match Gpu::new() {
+            Ok(g) => {
+                let name = adapter_name(&g);
+                (Some(g), name)
+            }
+            Err(e) => {
+                let e = e.to_string();
+                eprintln!(
+                    "note: rendering on the CPU: {}",
+                    e.lines().next().unwrap_or_default()
+                );
+                (None, "CPU (no GPU adapter found)".to_string())
+            }
+        },
+    };
+    let adapter = gpu.as_ref().map(|g| g.adapter());
+    std::fs::create_dir_all(&dir)
+        .with_context(|| format!("creating the output folder {}", dir.display()))?;
+
+    // 1. The paper's basis for D65 in the three modes.
+    eprintln!("demo [1/5] fit: the paper's basis under D65, modes paper, exact and nonneg");
+    let t = Instant::now();
+    let grid = WavelengthGrid::new(380.0, 780.0, 1.0)?;
+    let input = FitInput::from_names(
+        "D65",
+        fit::PAPER_BASIS,
+        &grid,
+        Observer::Cie1931,
+        Rule::Riemann,
+        RgbSpace::SRGB,
+    )?;
+    let mut fits = Vec::new();
+    for mode in [Mode::Paper, Mode::Exact, Mode::Nonneg] {
+        let f = fit::fit(&input, mode)
+            .with_context(|| format!("fitting the basis for D65 ({} mode)", mode_name(mode)))?;
+        let round_trip = fit::round_trip(&f, 17, &RgbSpace::SRGB);
+        fits.push(FitRow { fit: f, round_trip });
+    }
+    let basis_plot = "basis.png".to_string();
+    write_basis_plot(&fits[0].fit, &out(&basis_plot)).context("writing the basis plot")?;
+    let fit_commands = [
+        "specmap fit --light D65 --mode paper,exact,nonneg".to_string(),
+        format!("specmap fit --light D65 --plot {}", shown(&basis_plot)),
+    ];
+    seconds.push(("fit", t.elapsed().as_secs_f64()));
+
+    // 2. The map, converted as `specmap convert --light auto` does, and a small paper-mode copy.
+    let stem = file_stem(&env_path);
+    let spectral_name = format!("{stem}.spectral.exr");
+    eprintln!(
+        "demo [2/5] convert: {} -> {} (--light auto), and a paper-mode copy",
+        env_path.display(),
+        out(&spectral_name).display()
+    );
+    let t = Instant::now();
+    let converted = convert_map(
+        &env_str,
+        &dir,
+        &spectral_name,
+        "roundtrip.png",
+        Mode::Exact,
+        sizes.map,
+    )?;
+    let paper = convert_map(
+        &env_str,
+        &dir,
+        &format!("{stem}-paper.spectral.exr"),
+        "roundtrip-paper.png",
+        Mode::Paper,
+        Some(sizes.paper_map),
+    )?;
+    seconds.push(("convert", t.elapsed().as_secs_f64()));
+
+    // 3. The four presets under the converted map (the chart has its own three lights).
+    let t = Instant::now();
+    eprintln!(
+        "demo [3/5] render: {} on {renderer}",
+        Preset::ALL.map(|p| p.name()).join(", ")
+    );
+    let map = out(&spectral_name);
+    let (lighting, _) = env::load(&map, "D65")
+        .with_context(|| format!("loading the environment {}", map.display()))?;
+    let spectral = Spectral::default();
+    let backend_flag = match a.backend {
+        BackendArg::Auto => "",
+        BackendArg::Gpu => " --backend gpu",
+        BackendArg::Cpu => " --backend cpu",
+    };
+    let mut renders = Vec::new();
+    for preset in Preset::ALL {
+        let (w, h) = sizes.image(preset);
+        let chart = preset == Preset::Chart;
+        let scene = preset.scene(w, h, "D65", (!chart).then(|| lighting.clone()))?;
+        let t = Instant::now();
+        let prepared = Prepared::new(&scene, &spectral)
+            .with_context(|| format!("preparing the {} scene", preset.name()))?;
+        let (image, backend) = match &gpu {
+            Some(g) => match g.render(&prepared) {
+                Ok((image, _)) => (image, Backend::Gpu),
+                Err(e) if a.backend == BackendArg::Auto => {
+                    eprintln!(
+                        "note: the GPU could not render {}, using the CPU: {e}",
+                        preset.name()
+                    );
+                    (cpu::render(&prepared), Backend::Cpu)
+                }
+                Err(e) => {
+                    return Err(e).with_context(|| format!("rendering {}", preset.name()));
+                }
+            },
+            None => (cpu::render(&prepared), Backend::Cpu),
+        };
+        let file = format!("{}.png", preset.name());
+        image
+            .write_png(&out(&file), 0.0)
+            .with_context(|| format!("writing {}", out(&file).display()))?;
+        let env_flag = if chart {
+            String::new()
+        } else {
+            format!(" --env {}", sh(&map.display().to_string()))
+        };
+        renders.push(Render {
+            preset,
+            size: (w, h),
+            command: format!(
+                "specmap render --scene {}{env_flag} --size {w}x{h}{backend_flag} -o {}",
+                preset.name(),
+                shown(&file)
+            ),
+            file,
+            backend,
+            seconds: t.elapsed().as_secs_f64(),
+        });
+    }
+    seconds.push(("render", t.elapsed().as_secs_f64()));
+
+    // 4. Speed for accuracy: the ColorChecker under six lights on coarser and coarser grids.
+    let rows = sizes.steps.len() + 1;
+    eprintln!(
+        "demo [4/5] trade-off: the ColorChecker under {} lights, {rows} grids each, against 1 nm \
+         Simpson",
+        TRADEOFF_LIGHTS.len()
+    );
+    let t = Instant::now();
+    let tradeoff = tradeoff_table(&sizes)?;
+    seconds.push(("trade-off", t.elapsed().as_secs_f64()));
+
+    // 5. The page.
+    let index = out("index.html");
+    eprintln!("demo [5/5] page: {}", index.display());
+    let mut demo_command = format!("specmap demo -o {}", sh(&dir.display().to_string()));
+    if let Some(e) = &a.env {
+        demo_command += &format!(" --env {}", sh(&e.display().to_string()));
+    }
+    if a.backend != BackendArg::Auto {
+        demo_command += backend_flag;
+    }
+    if a.quick {
+        demo_command += " --quick";
+    }
+    seconds.push(("total", t_all.elapsed().as_secs_f64()));
+    let run = Run {
+        quick: a.quick,
+        env: env_str,
+        dir: dir.clone(),
+        fits,
+        basis_plot,
+        fit_commands,
+        converted,
+        paper,
+        renderer,
+        adapter,
+        renders,
+        render_spectral: spectral,
+        tradeoff,
+        seconds,
+        demo_command,
+    };
+    let html = page::html(&run);
+    specmap::io::write_atomic(&index, html.as_bytes())?;
+    let total = t_all.elapsed().as_secs_f64();
+
+    let mut files: Vec<String> = vec![run.basis_plot.clone()];
+    for c in [&run.converted, &run.paper] {
+        files.push(c.file.clone());
+        files.push(c.heatmap.clone());
+    }
+    files.extend(run.renders.iter().map(|r| r.file.clone()));
+    files.push("index.html".into());
+    if a.json {
+        let doc = serde_json::json!({
+            "index": index.display().to_string(),
+            "dir": dir.display().to_string(),
+            "files": files,
+            "env": run.env,
+            "quick": run.quick,
+            "renderer": run.renderer,
+            "adapter": run.adapter,
+            "seconds": run.seconds.iter().map(|(k, v)| (k.to_string(), serde_json::Value::from(*v)))
+                .collect::<serde_json::Map<_, _>>(),
+            "fit": run.fits.iter().map(|r| serde_json::json!({
+                "mode": mode_name(r.fit.mode),
+                "weights": r.fit.weights,
+                "roundtrip": r.round_trip,
+            })).collect::<Vec<_>>(),
+            "convert": run.converted.report,
+            "roundtrip": run.converted.round_trip,
+            "roundtrip_paper": run.paper.round_trip,
+            "renders": run.renders.iter().map(|r| serde_json::json!({
+                "scene": r.preset.name(),
+                "file": r.file,
+                "size": [r.size.0, r.size.1],
+                "backend": r.backend,
+                "seconds": r.seconds,
+            })).collect::<Vec<_>>(),
+            "tradeoff": run.tradeoff.iter().map(|r| serde_json::json!({
+                "light": r.light,
+                "step_nm": r.step_nm,
+                "samples": r.samples,
+                "rule": r.rule.to_string(),
+                "misses_the_line": r.measurement.is_none(),
+                "mean_dE2000": r.measurement.as_ref().map(|m| m.mean_de2000),
+                "max_dE2000": r.measurement.as_ref().map(|m| m.max_de2000),
+                "worst": r.measurement.as_ref().map(|m| m.worst.clone()),
+                "micros_per_colour": r.measurement.as_ref().map(|m| m.micros_per_colour),
+            })).collect::<Vec<_>>(),
+        });
+        super::emit(&(serde_json::to_string_pretty(&doc)? + "\n"));
+        return Ok(());
+    }
+    let c = &run.converted.report;
+    super::emit(&format!(
+        "wrote {}\ndemo: fitted D65 in 3 modes, converted {} (main light {}, sun {}), rendered 4 \
+         presets on {}, measured {} grids; {} files in {:.1} s. Open the page in a browser.\n",
+        index.display(),
+        run.env,
+        c.light,
+        if matches!(c.sun, specmap::envmap::sun::SunSearch::Found(_)) {
+            "found"
+        } else {
+            "not found"
+        },
+        run.renderer,
+        run.tradeoff.len(),
+        files.len(),
+        total
+    ));
+    Ok(())
+}
+
+/// The map to convert: `--env`, else envmaps/sunrise.exr here, else the one of the source tree
+/// this binary was built from.
+fn resolve_env(given: Option<&Path>) -> anyhow::Result<PathBuf> {
+    if let Some(p) = given {
+        if p.is_file() {
+            return Ok(p.to_path_buf());
+        }
+        anyhow::bail!(
+            "--env {}: {}; the demo needs an RGB environment map (OpenEXR or Radiance .hdr, \
+             lat-long or cube)",
+            p.display(),
+            if p.exists() {
+                "not a file"
+            } else {
+                "no such file"
+            }
+        );
+    }
+    let here = Path::new(DEFAULT_ENV);
+    if here.is_file() {
+        return Ok(here.to_path_buf());
+    }
+    let built = Path::new(env!("CARGO_MANIFEST_DIR")).join(DEFAULT_ENV);
+    if built.is_file() {
+        return Ok(built);
+    }
+    anyhow::bail!(
+        "the demo needs the repository's envmaps/ folder: {DEFAULT_ENV} is neither in the \
+         current folder nor at {}. Run it from the repository root, or point it at an RGB map \
+         with --env PATH",
+        built.display()
+    )
+}
+
+/// The input's file name without extension, kept to characters safe in file names and links.
+fn file_stem(p: &Path) -> String {
+    let s: String = p
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default()
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    if s.is_empty() {
+        "envmap".into()
+    } else {
+        s
+    }
+}
+
+/// `specmap convert INPUT -o DIR/NAME --light auto [--mode M] [--size N]`, then `specmap
+/// roundtrip DIR/NAME --heatmap DIR/HEATMAP`.
+fn convert_map(
+    input: &str,
+    dir: &Path,
+    name: &str,
+    heatmap: &str,
+    mode: Mode,
+    size: Option<usize>,
+) -> anyhow::Result<Converted> {
+    let output = dir.join(name);
+    let opts = ConvertOptions {
+        light: LightSpec::Auto,
+        mode,
+        size,
+        ..ConvertOptions::default()
+    };
+    let report = convert::convert(input, &output, &opts, &|_, _| {})
+        .with_context(|| format!("converting {input}"))?;
+    let mut de = Vec::new();
+    let round_trip = round_trip_file(&output, Observer::Cie1931, Rule::Riemann, Some(&mut de))?;
+    let heatmap_path = dir.join(heatmap);
+    write_heatmap(
+        &heatmap_path,
+        round_trip.width,
+        round_trip.height,
+        &de,
+        HEATMAP_MAX,
+    )?;
+    let out = sh(&output.display().to_string());
+    let mut command = format!("specmap convert {} -o {out} --light auto", sh(input));
+    if mode != Mode::Exact {
+        command += &format!(" --mode {}", mode_name(mode));
+    }
+    if let Some(s) = size {
+        command += &format!(" --size {s}");
+    }
+    Ok(Converted {
+        report,
+        file: name.to_string(),
+        round_trip,
+        heatmap: heatmap.to_string(),
+        command,
+        roundtrip_command: format!(
+            "specmap roundtrip {out} --heatmap {}",
+            sh(&heatmap_path.display().to_string())
+        ),
+    })
+}
+
+/// The adapter in words; a software one (lavapipe) is said to run on the CPU.
+fn adapter_name(g: &Gpu) -> String {
+    let a = g.adapter();
+    format!(
+        "GPU adapter {} via {}{}",
+        a.name,
+        a.backend,
+        if g.is_software() {
+            " (software, on the CPU)"
+        } else {
+            ""
+        }
+    )
+}
+
+/// The trade-off rows: each light, the Riemann steps and 5 nm Simpson, against 1 nm Simpson.
+fn tradeoff_table(sizes: &Sizes) -> anyhow::Result<Vec<TradeoffRow>> {
+    let mut grids: Vec<(f64, Rule)> = sizes.steps.iter().map(|&s| (s, Rule::Riemann)).collect();
+    grids.push((5.0, Rule::Simpson));
+    let mut rows = Vec::new();
+    for name in TRADEOFF_LIGHTS {
+        let light = specmap::data::spectrum(name)?;
+        let stimuli = tradeoff::colorchecker_under(&light.label, &light.data)?;
+        let reference = Reference::new(&stimuli, Observer::Cie1931, 380.0, 780.0)
+            .with_context(|| format!("the 1 nm reference under {name}"))?;
+        for &(step, rule) in &grids {
+            let grid = reference
+                .grid(step)
+                .with_context(|| format!("a {step} nm step does not divide 380..780 nm"))?;
+            // The light seen directly comes first: no energy on the grid means it missed the line.
+            let cmfs = Cmfs::new(Observer::Cie1931, &grid)?;
+            let measurement = if stimuli[0].xyz(&cmfs, rule).is_err() {
+                None
+            } else {
+                let mut best: Option<Measurement> = None;
+                for _ in 0..sizes.repeats.max(1) {
+                    let m = tradeoff::measure(&reference, &stimuli, &grid, rule, sizes.min_seconds)
+                        .with_context(|| format!("{name} at {step} nm ({rule})"))?;
+                    if best
+                        .as_ref()
+                        .is_none_or(|b| m.micros_per_colour < b.micros_per_colour)
+                    {
+                        best = Some(m);
+                    }
+                }
+                best
+            };
+            rows.push(TradeoffRow {
+                light: light.label.clone(),
+                step_nm: step,
+                samples: grid.len(),
+                rule,
+                measurement,
+            });
+        }
+    }
+    Ok(rows)
+}
+
+/// A word for a POSIX shell: as is when it is plain, else single-quoted.
+pub(super) fn sh(s: &str) -> String {
+    let plain = !s.is_empty()
+        && s.chars()
+            .all(|c| c.is_ascii_alphanumeric() || "_-./:=,+@%".contains(c));
+    if plain {
+        s.to_string()
+    } else {
+        format!("'{}'", s.replace('\'', r"'\''"))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shell_words_are_quoted_when_needed() {
+        assert_eq!(sh("out/demo"), "out/demo");
+        assert_eq!(sh("my maps/a b.exr"), "'my maps/a b.exr'");
+        assert_eq!(sh("it's"), r"'it'\''s'");
+        assert_eq!(sh(""), "''");
+    }
+
+    #[test]
+    fn stems_are_safe_in_links() {
+        assert_eq!(file_stem(Path::new("envmaps/sunrise.exr")), "sunrise");
+        assert_eq!(file_stem(Path::new("a b&<c>.hdr")), "a_b__c_");
+        assert_eq!(file_stem(Path::new("/")), "envmap");
+    }
+}
