@@ -65,6 +65,10 @@ pub struct RenderArgs {
     /// Number of wavelengths over 380..780 nm (default 81: 5 nm).
     #[arg(long, value_name = "N")]
     samples: Option<usize>,
+    /// Choose the coarsest step over 380..780 nm that keeps the scene's lights, pigments and
+    /// films within this CIEDE2000 of a 1 nm reference, and report it.
+    #[arg(long, value_name = "DE", conflicts_with_all = ["step", "samples"])]
+    tolerance: Option<f64>,
     /// Integration rule of the colour integrals.
     #[arg(long, value_enum, default_value_t = RuleArg::Riemann)]
     rule: RuleArg,
@@ -242,11 +246,26 @@ pub fn run(a: RenderArgs) -> anyhow::Result<()> {
         (None, Some(n)) => Spectral::samples(n)?,
         (None, None) => Spectral::default(),
     };
-    let spectral = Spectral {
+    let mut spectral = Spectral {
         rule: a.rule.into(),
         observer: a.observer.into(),
         space: RgbSpace::SRGB,
         ..base
+    };
+    let grid_choice = match a.tolerance {
+        None => None,
+        Some(tolerance) => {
+            let c = specmap::tradeoff::choose_grid(
+                &scene.stimuli()?,
+                spectral.observer,
+                380.0,
+                780.0,
+                spectral.rule,
+                tolerance,
+            )?;
+            spectral.grid = c.chosen;
+            Some(c)
+        }
     };
 
     // The backend.
@@ -350,6 +369,7 @@ pub fn run(a: RenderArgs) -> anyhow::Result<()> {
             "wavelengths": spectral.grid.len(),
             "range": spectral.grid.to_string(),
             "rule": spectral.rule,
+            "grid_choice": grid_choice,
             "light": scene.lightings.iter().map(|l| l.label.clone()).collect::<Vec<_>>(),
             "env": env_report,
             "prepare_s": prepare_s,
@@ -374,6 +394,9 @@ pub fn run(a: RenderArgs) -> anyhow::Result<()> {
             .map(|a| format!(" ({}, {})", a.name, a.backend))
             .unwrap_or_default()
     );
+    if let Some(c) = &grid_choice {
+        super::write_grid_choice(&mut out, c);
+    }
     if let Some(r) = &env_report {
         outln!(
             out,
