@@ -72,6 +72,7 @@ fn write_map(
             envmap,
             ev: None,
             attributes: vec![],
+            zip_level: specmap::envmap::exrio::ZIP_DEFAULT_LEVEL,
         },
     )
     .unwrap();
@@ -373,6 +374,7 @@ fn bad_inputs_get_clear_errors() {
             envmap: None,
             ev: None,
             attributes: vec![],
+            zip_level: specmap::envmap::exrio::ZIP_DEFAULT_LEVEL,
         },
     )
     .unwrap();
