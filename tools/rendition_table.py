@@ -5,7 +5,8 @@
 
 For each scene of tests/data/truth/manifest.json and each configuration: `specmap convert
 <scene>.rgb.exr -o X.exr <flags> --quiet --json`, then `specmap rendition <scene>.spectral.exr
-X.exr --json`. Each cell: mean / max rendition CIEDE2000 / mean white CIEDE2000 (over the normals
+X.exr --json`. `--config NAME=FLAGS` adds (or replaces) a column (NAME without `=`); `--only
+NAME,...` keeps only those columns. Each cell: mean / max rendition CIEDE2000 / mean white CIEDE2000 (over the normals
 up, +x, -x, +z, -z). `{light}` in a configuration's flags is the scene's right light (D65 for the
 skies, FL2, FL11, hps). The binary: $SPECMAP_BIN, else $CARGO_TARGET_DIR/debug/specmap, else
 target/debug/specmap. Only the standard library is needed.
@@ -25,10 +26,14 @@ BIN = os.environ.get("SPECMAP_BIN", str(TARGET / "debug" / "specmap"))
 TRUTH = ROOT / "tests" / "data" / "truth"
 
 RIGHT = {"interior_fl2": "FL2", "interior_fl11": "FL11", "street_hps": "hps"}
+# paper/exact/nonneg keep the paper's sun (D65), sky (the light's basis) and, with a named light,
+# its white premise (RGB (1,1,1) is the main light), so these are the methods as they were.
 CONFIGS = [
-    ("paper's method", "--mode paper --light {light} --white light --sun-spd D65"),
-    ("exact, D65 carrier", "--mode exact --light D65 --white light --sun-spd D65"),
+    ("paper's method, right light", "--mode paper --light {light}"),
+    ("exact, D65 carrier", "--mode exact --light D65"),
     ("default", ""),
+    ("default, right light", "--light {light}"),
+    ("default, --light auto", "--light auto"),
 ]
 
 
