@@ -24,7 +24,7 @@ pub fn daylight_xy(cct_k: f64) -> Result<[f64; 2]> {
     } else {
         -2.0064e9 / t.powi(3) + 1.9018e6 / (t * t) + 0.24748e3 / t + 0.23704
     };
-    Ok([x, -3.0 * x * x + 2.870 * x - 0.275])
+    Ok([x, daylight_locus_y(x)])
 }
 
 /// The relative SPD of CIE daylight at `cct_k` (S0 + M1 S1 + M2 S2, with M1 and M2 rounded to
@@ -35,16 +35,29 @@ pub fn daylight(cct_k: f64) -> Result<Tabulated> {
     let round3 = |v: f64| (v * 1000.0).round() / 1000.0;
     let m1 = round3((-1.3515 - 1.7703 * x + 5.9114 * y) / m);
     let m2 = round3((0.0300 - 31.4424 * x + 30.0717 * y) / m);
-    let basis = Table::builtin("cie-daylight")?;
-    let (s0, s1, s2) = (
-        basis.column("S0")?,
-        basis.column("S1")?,
-        basis.column("S2")?,
-    );
+    let [s0, s1, s2] = daylight_components()?;
     let values = (0..s0.values().len())
         .map(|i| s0.values()[i] + m1 * s1.values()[i] + m2 * s2.values()[i])
         .collect();
-    Tabulated::new(basis.wavelengths_nm().to_vec(), values)
+    Tabulated::new(s0.wavelengths_nm().to_vec(), values)
+}
+
+/// The CIE daylight basis functions S0, S1, S2 (CIE 15:2018, Table 6), 5 nm, 300-830 nm: every
+/// CIE daylight is `S0 + M1 S1 + M2 S2`, and any three coefficients span the family's plane, in
+/// which each chromaticity has exactly one member of a given luminance.
+pub fn daylight_components() -> Result<[Tabulated; 3]> {
+    let basis = Table::builtin("cie-daylight")?;
+    Ok([
+        basis.column("S0")?,
+        basis.column("S1")?,
+        basis.column("S2")?,
+    ])
+}
+
+/// The CIE daylight locus in the CIE 1931 xy diagram: `y = -3 x^2 + 2.87 x - 0.275`, defined
+/// between x = 0.2524 (25000 K) and x = 0.3823 (4000 K).
+pub fn daylight_locus_y(x: f64) -> f64 {
+    -3.0 * x * x + 2.870 * x - 0.275
 }
 
 /// A black body at `cct_k`, sampled at 1 nm over 300-830 nm and normalised to 100 at 560 nm.

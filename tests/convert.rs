@@ -72,11 +72,19 @@ fn sunrise_has_a_sun_and_forest_has_none_in_both_layouts() {
     let elevation = r["sun"]["elevation_deg"].as_f64().unwrap();
     assert!((0.0..20.0).contains(&elevation), "a low sun: {elevation}");
     assert!(r["sun"]["energy_share"].as_f64().unwrap() > 0.4);
-    assert_eq!(r["sun_spd"], "D65");
+    // The default (faithful) gives the sun the daylight of its own colour; the paper gives D65.
+    assert_eq!(r["method"], "faithful");
+    assert!(
+        r["sun_spd"].as_str().unwrap().starts_with("CIE daylight"),
+        "{}",
+        r["sun_spd"]
+    );
     assert_eq!(r["wavelengths_nm"].as_array().unwrap().len(), 81);
     assert_eq!(r["channels"], 81 + 4);
     assert!(
-        r["sanitized"]["negative"].as_u64().unwrap() > 0,
+        r["sanitized"]["negative"].as_u64().unwrap()
+            + r["sanitized"]["negative_kept"].as_u64().unwrap()
+            > 0,
         "DWAB leaves negatives"
     );
     // Exact mode: away from the sun the round trip is exact (to half precision, not measured
@@ -232,7 +240,24 @@ fn nan_and_negative_pixels_are_counted_or_refused() {
     let out = d.path().join("out.exr");
     let r = convert_json(&[input.to_str().unwrap(), "-o", out.to_str().unwrap()]);
     assert_eq!(r["sanitized"]["non_finite"], 2);
+    // (5, 6)'s -2 is clamped (the pixel was not finite); (7, 7) is an out-of-gamut colour of
+    // positive luminance, kept under the D65 premise...
+    assert_eq!(r["sanitized"]["negative"], 1);
+    assert_eq!(r["sanitized"]["negative_kept"], 1);
+    std::fs::remove_file(&out).unwrap();
+    // ...and clamped under the paper's premise (the map white-balanced to its light).
+    let r = convert_json(&[
+        input.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--mode",
+        "exact",
+        "--light",
+        "A",
+    ]);
+    assert_eq!(r["white"]["premise"], "light");
     assert_eq!(r["sanitized"]["negative"], 2);
+    assert_eq!(r["sanitized"]["negative_kept"], 0);
     std::fs::remove_file(&out).unwrap();
     let msg = fails(&[
         input.to_str().unwrap(),
@@ -298,6 +323,18 @@ fn basis_format_has_four_channels_and_the_spectra_in_the_header() {
         "--quiet",
     ]);
     assert_eq!(r["channels"], 4);
+    // The default method cannot be written as three ColorChecker coefficients: the report says
+    // what was written instead.
+    assert_eq!(r["method"], "basis");
+    assert!(
+        r["notes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|n| n.as_str().unwrap().contains("--format spectral")),
+        "{}",
+        r["notes"]
+    );
     let meta = exr::meta::MetaData::read_from_file(&out, false).unwrap();
     let h = &meta.headers[0];
     let names: Vec<String> = h.channels.list.iter().map(|c| c.name.to_string()).collect();
@@ -313,4 +350,74 @@ fn basis_format_has_four_channels_and_the_spectra_in_the_header() {
             "{key} missing"
         );
     }
+}
+
+/// `--white`: what RGB (1,1,1) means is chosen, reported, and recorded for `roundtrip`.
+#[test]
+fn the_white_premise_is_chosen_reported_and_recorded() {
+    let d = tempfile::tempdir().unwrap();
+    // A room lit by a sodium lamp, D65-referenced: the lamp and the walls it lights are orange.
+    let input = d.path().join("orange.exr");
+    use specmap::envmap::light::{rgb_of_xy, white_xy};
+    let lamp = rgb_of_xy(
+        white_xy("hps").unwrap(),
+        &specmap::colorimetry::RgbSpace::SRGB,
+    );
+    write_rgb(&input, 64, 32, |_, y| {
+        if y < 6 {
+            lamp.map(|c| c * 30.0)
+        } else {
+            lamp.map(|c| c * 0.3)
+        }
+    });
+    let out = d.path().join("out.exr");
+    let o = out.to_str().unwrap();
+    let i = input.to_str().unwrap();
+    // --light auto chooses the lamp and, seeing it orange, the D65 premise.
+    let r = convert_json(&[i, "-o", o, "--light", "auto"]);
+    assert_eq!(r["light"], "hps", "{}", r["light_choice"]);
+    assert_eq!(r["white"]["premise"], "d65");
+    assert!(r["white"]["reason"]
+        .as_str()
+        .unwrap()
+        .contains("colour of hps"));
+    let meta = exr::meta::MetaData::read_from_file(&out, false).unwrap();
+    let attrs = &meta.headers[0].own_attributes.other;
+    assert!(matches!(
+        attrs.get(&Text::from("specmap.white")),
+        Some(AttributeValue::Text(t)) if t == "d65"
+    ));
+    // The file round trip needs no white balance under the D65 premise.
+    let rt = specmap(&["roundtrip", o, "--json"]);
+    assert!(
+        rt.status.success(),
+        "{}",
+        String::from_utf8_lossy(&rt.stderr)
+    );
+    let rt: serde_json::Value = serde_json::from_slice(&rt.stdout).unwrap();
+    assert!(
+        rt["all"]["weighted_mean_de2000"].as_f64().unwrap() < 0.05,
+        "{rt}"
+    );
+    std::fs::remove_file(&out).unwrap();
+    // Explicit premises win over the scene.
+    let r = convert_json(&[i, "-o", o, "--light", "hps", "--white", "light"]);
+    assert_eq!(r["white"]["premise"], "light");
+    std::fs::remove_file(&out).unwrap();
+    // The paper's mode with a named light keeps the paper's premise.
+    let r = convert_json(&[i, "-o", o, "--mode", "paper", "--light", "hps"]);
+    assert_eq!(r["white"]["premise"], "light");
+    assert_eq!(r["method"], "basis");
+    std::fs::remove_file(&out).unwrap();
+    // A neutral map under a named lamp: balanced to it (the paper's case).
+    let grey = d.path().join("grey.exr");
+    write_rgb(
+        &grey,
+        64,
+        32,
+        |_, y| if y < 6 { [20.0; 3] } else { [0.2; 3] },
+    );
+    let r = convert_json(&[grey.to_str().unwrap(), "-o", o, "--light", "FL2"]);
+    assert_eq!(r["white"]["premise"], "light");
+    assert!(r["white"]["reason"].as_str().unwrap().contains("neutral"));
 }

@@ -1,9 +1,12 @@
 //! `specmap convert`: RGB environment map -> spectral OpenEXR.
 
-use super::{outln, ModeArg, SpaceArg};
+use super::{outln, SpaceArg};
 use anyhow::Context;
 use clap::{Args, ValueEnum};
-use specmap::envmap::convert::{self, ConvertOptions, LightSpec, OutputFormat, SunSpd};
+use specmap::envmap::convert::{
+    self, ConvertOptions, LightSpec, Method, OutputFormat, SkySpd, SunSpd, WhiteSpec,
+};
+use specmap::envmap::engine::WhitePremise;
 use specmap::envmap::exrio::{Compression, Precision};
 use specmap::envmap::layout::Layout;
 use specmap::envmap::sun::{SunSearch, SunSettings};
@@ -19,24 +22,36 @@ pub struct ConvertArgs {
     /// Output OpenEXR (written to a temporary file, then renamed).
     #[arg(short, long, value_name = "OUT.exr")]
     output: PathBuf,
-    /// Main light: a table name or CSV, or `auto` to choose it from the scene.
+    /// Main light: a table name or CSV, or `auto` to choose it (and, unless --white says, the
+    /// white premise) from the scene.
     #[arg(long, default_value = "D65")]
     light: String,
+    /// What RGB (1,1,1) is: `light` (the map is white-balanced to its main light, the paper's
+    /// premise), `d65` (D65-referenced: a sodium lamp looks orange), or `auto` (the brightest
+    /// regions decide). Default: auto, except `light` for paper/exact/nonneg with a named light.
+    #[arg(long, value_enum)]
+    white: Option<WhiteArg>,
+    /// Sky pixels of daylight colour: `daylight` (the CIE daylight family, S0 S1 S2) or `light`
+    /// (the main light's basis). Default: daylight for faithful, light otherwise.
+    #[arg(long, value_enum)]
+    sky: Option<SkyArg>,
     /// A fit from `specmap fit -o` (its light, basis, mode and space win).
     #[arg(long, value_name = "FIT.json")]
     fit: Option<PathBuf>,
     /// How RGB becomes a spectrum.
-    #[arg(long, value_enum, default_value_t = ModeArg::Exact)]
-    mode: ModeArg,
+    #[arg(long, value_enum, default_value_t = ConvertModeArg::Faithful)]
+    mode: ConvertModeArg,
     /// RGB space of the input.
     #[arg(long, value_enum, default_value_t = SpaceArg::Srgb)]
     space: SpaceArg,
     /// Find the sun and give its pixels their own SPD.
     #[arg(long, value_enum, default_value_t = SunArg::Auto)]
     sun: SunArg,
-    /// The sun's SPD: D65 (the paper), `match` (daylight or Planckian at the sun's CCT), or a light.
-    #[arg(long, default_value = "D65")]
-    sun_spd: String,
+    /// The sun's SPD: `daylight` (the CIE daylight family member of the sun's own colour,
+    /// exactly), D65 (the paper), `match` (daylight or Planckian at the sun's CCT), or a light.
+    /// Default: daylight for faithful, D65 otherwise.
+    #[arg(long)]
+    sun_spd: Option<String>,
     /// Input layout (default: the `envmap` attribute, else the aspect ratio).
     #[arg(long, value_enum, default_value_t = InLayout::Auto)]
     in_layout: InLayout,
@@ -80,6 +95,32 @@ pub struct ConvertArgs {
     /// Machine-readable summary.
     #[arg(long)]
     json: bool,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum ConvertModeArg {
+    /// the default: the sun and daylight-coloured sky as CIE daylight of their own colour, the
+    /// rest as the main light times a smooth modulation (exact round trip)
+    Faithful,
+    /// the paper's three weights on the ColorChecker basis (exact for white only)
+    Paper,
+    /// the ColorChecker basis with a full 3x3 matrix: exact round trip (the SPD may go negative)
+    Exact,
+    /// exact where the SPD stays non-negative, else the non-negative SPD of least CIEDE2000 error
+    Nonneg,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum WhiteArg {
+    Light,
+    D65,
+    Auto,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum SkyArg {
+    Daylight,
+    Light,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -161,16 +202,37 @@ pub fn run(a: ConvertArgs) -> anyhow::Result<()> {
             .map(|f| f.rgb_space())
             .unwrap_or(a.space.into()),
         fit,
-        mode: a.mode.into(),
+        mode: match a.mode {
+            ConvertModeArg::Paper => specmap::fit::Mode::Paper,
+            ConvertModeArg::Nonneg => specmap::fit::Mode::Nonneg,
+            ConvertModeArg::Faithful | ConvertModeArg::Exact => specmap::fit::Mode::Exact,
+        },
+        method: match a.mode {
+            ConvertModeArg::Faithful => Method::Faithful,
+            _ => Method::Basis,
+        },
+        white: a.white.map(|w| match w {
+            WhiteArg::Light => WhiteSpec::Light,
+            WhiteArg::D65 => WhiteSpec::D65,
+            WhiteArg::Auto => WhiteSpec::Auto,
+        }),
+        sky: a.sky.map(|s| match s {
+            SkyArg::Daylight => SkySpd::Daylight,
+            SkyArg::Light => SkySpd::Light,
+        }),
         sun: match a.sun {
             SunArg::Auto => Some(SunSettings::default()),
             SunArg::Off => None,
         },
-        sun_spd: match a.sun_spd.to_ascii_lowercase().as_str() {
-            "d65" => SunSpd::D65,
-            "match" => SunSpd::Match,
-            _ => SunSpd::Light(a.sun_spd.clone()),
-        },
+        sun_spd: a
+            .sun_spd
+            .as_ref()
+            .map(|s| match s.to_ascii_lowercase().as_str() {
+                "d65" => SunSpd::D65,
+                "match" => SunSpd::Match,
+                "daylight" => SunSpd::Daylight,
+                _ => SunSpd::Light(s.clone()),
+            }),
         in_layout,
         faces: matches!(a.in_layout, InLayout::Faces),
         layer: a.layer.clone(),
@@ -242,18 +304,29 @@ pub fn run(a: ConvertArgs) -> anyhow::Result<()> {
         r.input_size[1],
         r.input_description
     );
-    if r.sanitized.non_finite + r.sanitized.negative > 0 {
+    if r.sanitized.non_finite + r.sanitized.negative + r.sanitized.negative_kept > 0 {
         outln!(
             out,
-            "  sanitized    {} NaN/infinite and {} negative values set to 0",
+            "  sanitized    {} NaN/infinite and {} negative values set to 0; {} negative values \
+             of out-of-gamut colours kept",
             r.sanitized.non_finite,
-            r.sanitized.negative
+            r.sanitized.negative,
+            r.sanitized.negative_kept
         );
     }
     match &r.light_choice {
         Some(c) => outln!(out, "  light        {} (auto: {})", r.light, c.reason),
         None => outln!(out, "  light        {}", r.light),
     }
+    outln!(
+        out,
+        "  white        RGB (1,1,1) is {} ({})",
+        match r.white.premise {
+            WhitePremise::Light => "the main light",
+            WhitePremise::D65 => "D65 white",
+        },
+        r.white.reason
+    );
     if let Some(c) = &r.grid_choice {
         super::write_grid_choice(&mut out, c);
     }
@@ -267,6 +340,21 @@ pub fn run(a: ConvertArgs) -> anyhow::Result<()> {
         r.condition_number,
         if r.regularized { " (reduced)" } else { "" }
     );
+    let sp = &r.spectra;
+    outln!(
+        out,
+        "  spectra      {:?} method: {} sun, {} daylight sky, {} smooth x light, {} ColorChecker \
+         x light pixels; {} go negative somewhere",
+        r.method,
+        sp.sun,
+        sp.daylight,
+        sp.smooth,
+        sp.colorchecker,
+        sp.negative
+    );
+    for n in &r.notes {
+        outln!(out, "  note         {n}");
+    }
     outln!(out, "  sun          {}", sun_text(r));
     outln!(out, "  output       {}", output_text(r));
     outln!(

@@ -3,13 +3,13 @@
 
 use crate::colorimetry::{Observer, RgbSpace};
 use crate::data;
-use crate::envmap::engine::Engine;
+use crate::envmap::engine::{Engine, Model, PixelKind, SunSource, Took, WhitePremise};
 use crate::envmap::exrio::{
     self, spectral_channel_name, AttrValue, ChannelSet, Compression, EnvmapAttr, Precision,
     SpectralLayout, SpectralWriter, HALF_MAX,
 };
 use crate::envmap::layout::{detect, EnvMap, Layout};
-use crate::envmap::light::{self, LightChoice};
+use crate::envmap::light::{self, LightChoice, WhiteChoice};
 use crate::envmap::sun::{find_sun, SunSearch, SunSettings};
 use crate::error::{Error, Result};
 use crate::fit::{self, Fit, FitInput, Mode};
@@ -32,10 +32,45 @@ pub enum LightSpec {
 pub enum SunSpd {
     /// CIE D65, as in the paper.
     D65,
+    /// The member of the CIE daylight family (S0, S1, S2) whose colour is the sun pixels' mean
+    /// colour, exactly (a low sun is not D65).
+    Daylight,
     /// Daylight (or a Planckian radiator below 4000 K) at the sun pixels' CCT.
     Match,
     /// Any light by name.
     Light(String),
+}
+
+/// How pixels become spectra.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Method {
+    /// The default: the sun as the daylight that has its colour, daylight-coloured sky pixels as
+    /// CIE daylight, everything else as the main light times a smooth modulation; RGB taken as
+    /// D65-referenced unless the scene says it is white-balanced to its light.
+    Faithful,
+    /// The paper's: every pixel on the ColorChecker basis of the fit's mode (paper, exact,
+    /// nonneg), the sun given D65, RGB white-balanced to the main light.
+    Basis,
+}
+
+/// What RGB (1,1,1) is (see [`WhitePremise`]), or chosen from the scene.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum WhiteSpec {
+    Light,
+    D65,
+    /// The brightest regions decide (see [`light::choose_white`]).
+    Auto,
+}
+
+/// The spectra of daylight-coloured sky pixels.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SkySpd {
+    /// Members of the CIE daylight family (S0, S1, S2), exact in RGB.
+    Daylight,
+    /// As any other pixel (the main light's basis).
+    Light,
 }
 
 /// The most bytes of f32 rows computed before they are written (one batch; the writer's blocks
@@ -58,14 +93,22 @@ pub struct ConvertOptions {
     pub light: LightSpec,
     /// A fit from `specmap fit -o`; otherwise the basis is fitted on the output grid.
     pub fit: Option<Fit>,
+    /// The fit's mode: the ColorChecker basis of [`Method::Basis`], and the fallback of
+    /// [`Method::Faithful`] where the smooth modulation would go negative.
     pub mode: Mode,
+    pub method: Method,
+    /// None: the method's default (faithful: auto; basis: light, or auto with `--light auto`).
+    pub white: Option<WhiteSpec>,
+    /// None: the method's default (faithful: daylight; basis: light).
+    pub sky: Option<SkySpd>,
     pub space: RgbSpace,
     pub basis: [String; 3],
     pub observer: Observer,
     pub rule: Rule,
     /// None: no sun detection.
     pub sun: Option<SunSettings>,
-    pub sun_spd: SunSpd,
+    /// None: the method's default (faithful: daylight; basis: D65).
+    pub sun_spd: Option<SunSpd>,
     /// Overrides the layout found from the `envmap` attribute or the aspect ratio.
     pub in_layout: Option<Layout>,
     /// The input is a pattern with `{face}` naming six face files.
@@ -89,18 +132,35 @@ pub struct ConvertOptions {
     pub strict: bool,
 }
 
+impl ConvertOptions {
+    /// The command line's default: the faithful method (see [`Method::Faithful`]).
+    pub fn faithful() -> Self {
+        ConvertOptions {
+            method: Method::Faithful,
+            ..ConvertOptions::default()
+        }
+    }
+}
+
+/// The library's default stays the paper's basis method in exact mode (D65 sun, light premise):
+/// its spectra lie in the span of the ColorChecker basis and the sun's SPD, which is what the
+/// renderer's spectral loader (`render::env`) projects onto. The CLI's default is
+/// [`ConvertOptions::faithful`].
 impl Default for ConvertOptions {
     fn default() -> Self {
         ConvertOptions {
             light: LightSpec::Named("D65".into()),
             fit: None,
             mode: Mode::Exact,
+            method: Method::Basis,
+            white: None,
+            sky: None,
             space: RgbSpace::SRGB,
             basis: fit::PAPER_BASIS.map(String::from),
             observer: Observer::Cie1931,
             rule: Rule::Riemann,
             sun: Some(SunSettings::default()),
-            sun_spd: SunSpd::D65,
+            sun_spd: None,
             in_layout: None,
             faces: false,
             layer: None,
@@ -124,6 +184,43 @@ pub struct Sanitized {
     pub non_finite: usize,
     /// Negative channel values (lossy compression leaves small ones) set to 0.
     pub negative: usize,
+    /// Negative channel values kept: under the D65 premise a pixel of positive luminance with a
+    /// negative channel is a colour outside the RGB gamut (sodium light), which the spectrum can
+    /// carry.
+    pub negative_kept: usize,
+}
+
+/// How many pixels got which spectrum.
+#[derive(Debug, Clone, Copy, Default, serde::Serialize)]
+pub struct SpectraCount {
+    pub sun: usize,
+    /// CIE daylight family (daylight-coloured sky).
+    pub daylight: usize,
+    /// Main light x smooth modulation.
+    pub smooth: usize,
+    /// Main light x ColorChecker basis.
+    pub colorchecker: usize,
+    /// Pixels whose spectrum goes below zero somewhere (the RGB round trip stays exact).
+    pub negative: usize,
+}
+
+impl SpectraCount {
+    fn add(&mut self, took: Took, negative: bool) {
+        match took {
+            Took::Sun => self.sun += 1,
+            Took::Daylight => self.daylight += 1,
+            Took::Smooth => self.smooth += 1,
+            Took::Colorchecker => self.colorchecker += 1,
+        }
+        self.negative += negative as usize;
+    }
+    fn merge(&mut self, o: &SpectraCount) {
+        self.sun += o.sun;
+        self.daylight += o.daylight;
+        self.smooth += o.smooth;
+        self.colorchecker += o.colorchecker;
+        self.negative += o.negative;
+    }
 }
 
 /// RGB -> SPD -> RGB over the written pixels.
@@ -155,6 +252,15 @@ pub struct ConvertReport {
     pub sun_spd: Option<String>,
     pub light: String,
     pub light_choice: Option<LightChoice>,
+    pub method: Method,
+    /// What RGB (1,1,1) was taken to be, and why.
+    pub white: WhiteChoice,
+    pub sky: SkySpd,
+    /// The smooth modulation was used (faithful method, a light that can carry every colour).
+    pub smooth: bool,
+    pub spectra: SpectraCount,
+    /// What the conversion could not do as asked, in words.
+    pub notes: Vec<String>,
     pub mode: Mode,
     pub weights: [f64; 3],
     pub condition_number: f64,
@@ -196,11 +302,29 @@ fn read_input(input: &str, opts: &ConvertOptions) -> Result<(EnvMap, String)> {
     Ok((map, img.description))
 }
 
-/// Sets NaN/infinite values to 0 (or refuses them) and clamps negatives, counting both.
-fn sanitize(map: &mut EnvMap, strict: bool, input: &str) -> Result<Sanitized> {
+/// A pixel index and its RGB before negatives were clamped.
+type OutOfGamut = (usize, [f32; 3]);
+
+/// Sets NaN/infinite values to 0 (or refuses them) and clamps negatives, counting both. Pixels of
+/// positive luminance with a negative channel (out-of-gamut colours) are returned as they were,
+/// to be restored under the D65 premise.
+fn sanitize(
+    map: &mut EnvMap,
+    strict: bool,
+    input: &str,
+    space: &RgbSpace,
+) -> Result<(Sanitized, Vec<OutOfGamut>)> {
     let mut s = Sanitized::default();
+    let m = space.to_xyz_matrix();
+    let mut out_of_gamut = Vec::new();
     let width = map.image.width;
     for (i, p) in map.image.pixels.iter_mut().enumerate() {
+        if p.iter().all(|v| v.is_finite()) && p.iter().any(|&v| v < 0.0) {
+            let y = (0..3).map(|k| m[(1, k)] * p[k] as f64).sum::<f64>();
+            if y > 0.0 {
+                out_of_gamut.push((i, *p));
+            }
+        }
         for (c, v) in p.iter_mut().enumerate() {
             if !v.is_finite() {
                 if strict {
@@ -220,7 +344,7 @@ fn sanitize(map: &mut EnvMap, strict: bool, input: &str) -> Result<Sanitized> {
             }
         }
     }
-    Ok(s)
+    Ok((s, out_of_gamut))
 }
 
 fn same_file(a: &Path, b: &Path) -> bool {
@@ -246,7 +370,7 @@ pub fn convert(
     }
     let t0 = Instant::now();
     let (mut map, description) = read_input(input, opts)?;
-    let sanitized = sanitize(&mut map, opts.strict, input)?;
+    let (mut sanitized, out_of_gamut) = sanitize(&mut map, opts.strict, input, &opts.space)?;
     let input_layout = map.layout;
     let input_size = [map.image.width, map.image.height];
     let seconds_read = t0.elapsed().as_secs_f64();
@@ -264,9 +388,11 @@ pub fn convert(
     if size == 0 {
         return Err(Error::invalid("--size must be at least 1"));
     }
-    if out_layout != input_layout || size != in_size {
+    let resampled = out_layout != input_layout || size != in_size;
+    if resampled {
         map = map.resample(out_layout, size);
     }
+    let mut notes = Vec::new();
 
     let sun = match &opts.sun {
         Some(settings) => find_sun(&map, &opts.space, settings),
@@ -283,10 +409,57 @@ pub fn convert(
             (c.light.clone(), Some(c))
         }
     };
+    // The white premise.
+    let white_spec = opts.white.unwrap_or(match (opts.method, &opts.light) {
+        (Method::Faithful, _) | (Method::Basis, LightSpec::Auto) => WhiteSpec::Auto,
+        (Method::Basis, LightSpec::Named(_)) => WhiteSpec::Light,
+    });
+    let white = match white_spec {
+        WhiteSpec::Light => WhiteChoice {
+            premise: WhitePremise::Light,
+            reason: "--white light: RGB (1,1,1) is the main light (the paper's premise)".into(),
+        },
+        WhiteSpec::D65 => WhiteChoice {
+            premise: WhitePremise::D65,
+            reason: "--white d65: RGB (1,1,1) is D65 white".into(),
+        },
+        WhiteSpec::Auto => light::choose_white(&map, &opts.space, &light_name)?,
+    };
+    if white.premise == WhitePremise::D65 && !out_of_gamut.is_empty() {
+        if resampled {
+            notes.push(format!(
+                "{} out-of-gamut pixels (negative channels) were set to 0 before resampling",
+                out_of_gamut.len()
+            ));
+        } else {
+            for &(i, p) in &out_of_gamut {
+                let n = p.iter().filter(|&&v| v < 0.0).count();
+                sanitized.negative -= n;
+                sanitized.negative_kept += n;
+                map.image.pixels[i] = p;
+            }
+        }
+    }
+    let sky = opts.sky.unwrap_or(match opts.method {
+        Method::Faithful => SkySpd::Daylight,
+        Method::Basis => SkySpd::Light,
+    });
+    let sun_choice = opts.sun_spd.clone().unwrap_or(match opts.method {
+        Method::Faithful => SunSpd::Daylight,
+        Method::Basis => SunSpd::D65,
+    });
     // The sun's SPD.
-    let sun_spd: Option<(String, Tabulated)> = match (sun.sun(), &opts.sun_spd) {
+    let sun_spd: Option<(String, Tabulated)> = match (sun.sun(), &sun_choice) {
         (None, _) => None,
         (Some(_), SunSpd::D65) => Some(("D65".into(), data::spectrum("D65")?.data)),
+        (Some(s), SunSpd::Daylight) => {
+            // Stands in for the SPD in the grid choice; the engine fits the exact one.
+            let k = s.cct.kelvin.unwrap_or(6504.0);
+            Some((
+                format!("CIE daylight family, the sun's colour (CCT {k:.0} K)"),
+                illuminant::natural(k)?,
+            ))
+        }
         (Some(s), SunSpd::Match) => {
             let k = s.cct.kelvin.unwrap_or(6504.0);
             let label = if k < illuminant::DAYLIGHT_RANGE_K.0 {
@@ -341,17 +514,65 @@ pub fn convert(
         }
     };
 
-    let engine = Engine::new(&fit, grid, opts.rule, sun_spd.as_ref().map(|(_, t)| t))?;
-    let sun_mask = {
-        let mut m = vec![false; map.image.pixels.len()];
+    // The basis format holds three ColorChecker coefficients and a sun: the faithful method's
+    // daylight sky and smooth modulation need the spectral format.
+    let (method, sky) = match (opts.method, opts.format) {
+        (Method::Faithful, OutputFormat::Basis) => {
+            notes.push(
+                "--format basis stores three coefficients on the ColorChecker basis: every \
+                 pixel is written in the fit's mode on that basis (the faithful method's \
+                 daylight sky and smooth modulation need --format spectral)"
+                    .into(),
+            );
+            (Method::Basis, SkySpd::Light)
+        }
+        (m, _) => (m, sky),
+    };
+    let model = Model {
+        white: white.premise,
+        sky_daylight: sky == SkySpd::Daylight,
+        smooth: method == Method::Faithful,
+    };
+    let sun_source = match (&sun_spd, sun.sun(), &sun_choice) {
+        (None, _, _) | (_, None, _) => SunSource::None,
+        (Some(_), Some(s), SunSpd::Daylight) => SunSource::DaylightFit(s.mean_rgb),
+        (Some((_, t)), _, _) => SunSource::Spd(t),
+    };
+    let engine = Engine::with_model(&fit, grid, opts.rule, sun_source, model)?;
+    if model.sky_daylight && !engine.sky_daylight_active() {
+        notes.push(format!(
+            "the main light {} is not daylight: sky pixels take its basis as any other",
+            fit.light
+        ));
+    }
+    if model.smooth && !engine.smooth_active() {
+        notes.push(format!(
+            "the main light {} is too narrow for the smooth modulation to carry every colour: \
+             its pixels use the ColorChecker basis",
+            fit.light
+        ));
+    }
+    let kinds: Vec<PixelKind> = {
+        let mut k = vec![PixelKind::Plain; map.image.pixels.len()];
+        let width = map.image.width;
+        if engine.sky_daylight_active() {
+            k.par_iter_mut().enumerate().for_each(|(i, k)| {
+                if map
+                    .direction(i % width, i / width)
+                    .is_some_and(|d| d[1] > 0.0)
+                {
+                    *k = PixelKind::Sky;
+                }
+            });
+        }
         if sun_spd.is_some() {
             if let Some(s) = sun.sun() {
                 for &i in &s.pixels {
-                    m[i] = true;
+                    k[i] = PixelKind::Sun;
                 }
             }
         }
-        m
+        k
     };
 
     // The channels.
@@ -371,7 +592,7 @@ pub fn convert(
     let ev = match opts.precision {
         Precision::Float => None,
         Precision::Half => {
-            let bound = value_bound(&map, &engine, &sun_mask, opts.format);
+            let bound = value_bound(&map, &engine, &kinds, opts.format);
             (bound > HALF_MAX as f64).then(|| (bound / HALF_MAX as f64).log2().ceil())
         }
     };
@@ -402,14 +623,42 @@ pub fn convert(
         ),
         (
             "specmap.lightRGB".into(),
-            AttrValue::F32Vec(engine.light_rgb().map(|v| v as f32).to_vec()),
+            AttrValue::F32Vec(engine.white_balance().map(|v| v as f32).to_vec()),
+        ),
+        (
+            "specmap.white".into(),
+            AttrValue::Text(
+                match white.premise {
+                    WhitePremise::Light => "light",
+                    WhitePremise::D65 => "d65",
+                }
+                .into(),
+            ),
+        ),
+        (
+            "specmap.method".into(),
+            AttrValue::Text(
+                match method {
+                    Method::Faithful => "faithful",
+                    Method::Basis => "basis",
+                }
+                .into(),
+            ),
         ),
         (
             "specmap.radiometry".into(),
             AttrValue::Text(
-                "relative radiance; Y = sum(L ybar) / sum(ybar); RGB (1,1,1) is the main \
-                 light's SPD at Y = 1"
-                    .into(),
+                match white.premise {
+                    WhitePremise::Light => {
+                        "relative radiance; Y = sum(L ybar) / sum(ybar); RGB (1,1,1) is the main \
+                         light's SPD at Y = 1"
+                    }
+                    WhitePremise::D65 => {
+                        "relative radiance; Y = sum(L ybar) / sum(ybar); RGB (1,1,1) is D65 \
+                         white at Y = 1; the main light's SPD has Y = 1"
+                    }
+                }
+                .into(),
             ),
         ),
         (
@@ -469,38 +718,43 @@ pub fn convert(
     let rows_per_block = (blocks * lines).max(16).min(height);
     let mut buffer = vec![0f32; rows_per_block * width * per_pixel];
     let (mut all, mut no_sun) = (Accumulator::default(), Accumulator::default());
+    let mut spectra = SpectraCount::default();
     let mut y0 = 0;
     while y0 < height {
         let rows = rows_per_block.min(height - y0);
         let buf = &mut buffer[..rows * width * per_pixel];
-        let stats: Vec<(Accumulator, Accumulator)> = buf
+        let stats: Vec<(Accumulator, Accumulator, SpectraCount)> = buf
             .par_chunks_mut(width * per_pixel)
             .enumerate()
             .map(|(r, row)| {
                 let y = y0 + r;
                 let (mut a, mut b) = (Accumulator::default(), Accumulator::default());
+                let mut count = SpectraCount::default();
                 // The basis format writes coefficients; the round trip still needs the spectrum.
                 let mut scratch = vec![0f32; bands];
                 for x in 0..width {
                     let i = y * width + x;
                     let rgb = map.image.pixels[i];
-                    let is_sun = sun_mask[i];
+                    let kind = kinds[i];
+                    let is_sun = kind == PixelKind::Sun;
                     let out = &mut row[x * per_pixel..(x + 1) * per_pixel];
-                    let back = match opts.format {
+                    let r = match opts.format {
                         OutputFormat::Spectral => {
-                            let r = engine.spectrum(rgb, is_sun, &mut out[..bands]);
+                            let r = engine.spectrum(rgb, kind, &mut out[..bands]);
                             out[bands..bands + 3].copy_from_slice(&rgb);
                             out[bands + 3] = is_sun as u8 as f32;
-                            r.rgb_back
+                            r
                         }
                         OutputFormat::Basis => {
                             let c = engine.coefficients(rgb, is_sun);
                             for k in 0..4 {
                                 out[k] = c[k] as f32;
                             }
-                            engine.spectrum(rgb, is_sun, &mut scratch).rgb_back
+                            engine.spectrum(rgb, kind, &mut scratch)
                         }
                     };
+                    count.add(r.took, r.negative);
+                    let back = r.rgb_back;
                     let omega = map.solid_angle(x, y);
                     let lum = engine.luminance(rgb);
                     if lum > 0.0 && omega > 0.0 {
@@ -511,12 +765,13 @@ pub fn convert(
                         }
                     }
                 }
-                (a, b)
+                (a, b, count)
             })
             .collect();
-        for (a, b) in stats {
+        for (a, b, c) in stats {
             all.merge(&a);
             no_sun.merge(&b);
+            spectra.merge(&c);
         }
         writer.write_rows(y0, buf)?;
         y0 += rows;
@@ -546,6 +801,16 @@ pub fn convert(
         sun,
         light: fit.light.clone(),
         light_choice,
+        method,
+        white,
+        sky: if engine.sky_daylight_active() {
+            SkySpd::Daylight
+        } else {
+            SkySpd::Light
+        },
+        smooth: engine.smooth_active(),
+        spectra,
+        notes,
         mode: fit.mode,
         weights: fit.weights,
         condition_number: fit.condition_number,
@@ -566,28 +831,19 @@ pub fn convert(
 }
 
 /// An upper bound of the values written (to choose an EV scale for half floats).
-fn value_bound(map: &EnvMap, engine: &Engine, sun: &[bool], format: OutputFormat) -> f64 {
-    let peak: Vec<f64> = engine
-        .basis_spectra()
-        .iter()
-        .map(|b| b.iter().fold(0f32, |m, &v| m.max(v.abs())) as f64)
-        .collect();
-    let sun_peak = engine
-        .sun_spectrum()
-        .map(|s| s.iter().fold(0f32, |m, &v| m.max(v.abs())) as f64)
-        .unwrap_or(0.0);
+fn value_bound(map: &EnvMap, engine: &Engine, kinds: &[PixelKind], format: OutputFormat) -> f64 {
     map.image
         .pixels
         .par_iter()
         .enumerate()
         .map(|(i, &rgb)| {
-            let c = engine.coefficients(rgb, sun[i]);
-            let preview = rgb.iter().fold(0f32, |m, &v| m.max(v)) as f64;
+            let preview = rgb.iter().fold(0f32, |m, &v| m.max(v.abs())) as f64;
             let spectral = match format {
-                OutputFormat::Spectral => {
-                    (0..3).map(|j| c[j].abs() * peak[j]).sum::<f64>() + c[3] * sun_peak
-                }
-                OutputFormat::Basis => c.iter().fold(0f64, |m, v| m.max(v.abs())),
+                OutputFormat::Spectral => engine.bound(rgb, kinds[i]),
+                OutputFormat::Basis => engine
+                    .coefficients(rgb, kinds[i] == PixelKind::Sun)
+                    .iter()
+                    .fold(0f64, |m, v| m.max(v.abs())),
             };
             spectral.max(preview)
         })

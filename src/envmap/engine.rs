@@ -1,22 +1,197 @@
-//! The per-pixel engine of the conversion: linear RGB -> basis coefficients -> spectral radiance,
-//! and the spectrum's RGB back, on the output wavelength grid.
+//! The per-pixel engine of the conversion: linear RGB -> spectral radiance on the output grid,
+//! and the spectrum's RGB back.
 //!
 //! Radiometric scale (the convention of pbrt-v4 and Mitsuba 3): luminance is
-//! `Y = sum(L ybar) / sum(ybar)`, and one global factor makes the main light's SPD, the spectrum
-//! of RGB (1,1,1), have Y = 1. So RGB (1,1,1) under D65 becomes D65 scaled to Y = 1.
+//! `Y = sum(L ybar) / sum(ybar)`, and one global factor makes the main light's SPD have Y = 1.
+//!
+//! The white premise ([`WhitePremise`]) says what RGB (1,1,1) means: the main light (the paper's
+//! premise: the map is white-balanced to it) or D65 white (the map is D65-referenced, as a
+//! renderer or a camera in a fixed white balance writes it). Internally every pixel is first made
+//! D65-referenced ("true" RGB, `r`): `r = diag(RGB_light) rgb` under the light premise.
+//!
+//! Three ways to make a spectrum of `r`, all linear and exact in RGB (one 3x3 solve each):
+//! - the ColorChecker basis of the paper, `sum a_j MCC_j * light` ([`crate::fit`]'s modes);
+//! - the CIE daylight basis `a_0 S0 + a_1 S1 + a_2 S2`, for sky pixels whose chromaticity lies on
+//!   the daylight locus (the family real skylight belongs to);
+//! - the main light times a smooth modulation, `light * (a_0 + a_1 x + a_2 x^2)` with
+//!   `x = (lambda - 580 nm) / 200 nm`: a pixel of the light's own colour is the light exactly,
+//!   and what a lamp lights gets the lamp's lines, gently reweighted. Where that goes negative,
+//!   the ColorChecker basis is used if it does not.
+//!
 //! Sun pixels get the sun's SPD at the luminance their own conversion would have had.
 
 use crate::colorimetry::{delta_e_2000, Cmfs, Lab, Xyz};
 use crate::error::{Error, Result};
-use crate::fit::{Fit, Upsampler};
+use crate::fit::{Fit, Upsampler, CONDITION_LIMIT};
+use crate::illuminant;
 use crate::spectrum::{Interpolation, Rule, Spectrum, Tabulated, WavelengthGrid};
 use nalgebra::{Matrix3, Vector3};
+
+/// What RGB (1,1,1) is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum WhitePremise {
+    /// The main light's SPD (the paper: the map is white-balanced to its main light).
+    Light,
+    /// D65 white (the map is referenced to D65 whatever lights it; a sodium lamp looks orange).
+    D65,
+}
+
+/// What a pixel is, for choosing its spectrum.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PixelKind {
+    /// Below the horizon, or a layout without directions.
+    Plain,
+    /// Above the horizon: daylight-coloured pixels may take the daylight basis.
+    Sky,
+    /// Part of the sun.
+    Sun,
+}
+
+/// The model the engine follows beyond the fit.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Model {
+    pub white: WhitePremise,
+    /// Daylight-coloured sky pixels as members of the CIE daylight family.
+    pub sky_daylight: bool,
+    /// Pixels other than sun and daylight sky as the main light times a smooth modulation
+    /// (otherwise the ColorChecker basis of the fit).
+    pub smooth: bool,
+}
+
+impl Model {
+    /// The paper's model: one ColorChecker basis, white-balanced to the main light.
+    pub const PAPER: Model = Model {
+        white: WhitePremise::Light,
+        sky_daylight: false,
+        smooth: false,
+    };
+}
+
+/// The SPD of the sun's pixels.
+#[derive(Debug, Clone, Copy)]
+pub enum SunSource<'a> {
+    /// Sun pixels are converted as any other pixel.
+    None,
+    /// This SPD, at each pixel's luminance.
+    Spd(&'a Tabulated),
+    /// The member of the CIE daylight family (S0, S1, S2) whose RGB is this input RGB (the sun
+    /// region's mean colour), at each pixel's luminance.
+    DaylightFit([f64; 3]),
+}
+
+/// A pixel's sky test: within this distance in CIE 1931 y of the daylight locus...
+pub const SKY_LOCUS_TOLERANCE: f64 = 0.02;
+/// ...and between these x (25000 K and, extended below CIE's 4000 K, about 3000 K).
+pub const SKY_LOCUS_X: (f64, f64) = (0.2000, 0.4400);
+/// The smooth modulation's variable: x = (lambda - centre) / half width.
+const SMOOTH_CENTRE_NM: f64 = 580.0;
+const SMOOTH_HALF_WIDTH_NM: f64 = 200.0;
+/// A spectrum is "negative" when some value is below -this x its peak.
+const NEGATIVE_TOLERANCE: f64 = 1e-4;
+
+/// A main light is daylight when its least-squares fit by S0, S1, S2 leaves at most this relative
+/// RMS residual (CIE D illuminants: ~0; FL2: 0.4; A: 0.1; see the tests).
+pub const DAYLIGHT_RESIDUAL: f64 = 0.03;
+
+/// The relative RMS residual of `light`'s least-squares fit by the daylight basis.
+fn daylight_residual(light: &Spectrum, d: &Basis3) -> f64 {
+    let l = light.values();
+    let b = |j: usize, i: usize| d.spectra[j][i] as f64;
+    let g = Matrix3::from_fn(|p, q| (0..l.len()).map(|i| b(p, i) * b(q, i)).sum::<f64>());
+    let rhs = Vector3::from_fn(|p, _| (0..l.len()).map(|i| b(p, i) * l[i]).sum::<f64>());
+    let Some(c) = g.try_inverse().map(|gi| gi * rhs) else {
+        return f64::INFINITY;
+    };
+    let (mut res, mut norm) = (0.0, 0.0);
+    for (i, &v) in l.iter().enumerate() {
+        let fit: f64 = (0..3).map(|j| c[j] * b(j, i)).sum();
+        res += (fit - v).powi(2);
+        norm += v * v;
+    }
+    (res / norm).sqrt()
+}
+
+/// Writes `sum a_j B_j` into `out` and returns whether it is negative somewhere.
+fn write_combination(spectra: &[Vec<f32>; 3], a: &Vector3<f64>, out: &mut [f32]) -> bool {
+    let (a0, a1, a2) = (a[0] as f32, a[1] as f32, a[2] as f32);
+    let (mut lo, mut hi) = (0f32, 0f32);
+    for (i, o) in out.iter_mut().enumerate() {
+        let v = a0 * spectra[0][i] + a1 * spectra[1][i] + a2 * spectra[2][i];
+        *o = v;
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    lo < -(NEGATIVE_TOLERANCE as f32) * hi
+}
+
+/// The smallest value of `sum a_j B_j` relative to its peak (negative: how negative).
+fn relative_min(spectra: &[Vec<f32>; 3], a: &Vector3<f64>) -> f64 {
+    let (mut lo, mut hi) = (0f64, 0f64);
+    for ((&b0, &b1), &b2) in spectra[0].iter().zip(&spectra[1]).zip(&spectra[2]) {
+        let v = a[0] * b0 as f64 + a[1] * b1 as f64 + a[2] * b2 as f64;
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    if hi > 0.0 {
+        lo / hi
+    } else {
+        lo
+    }
+}
+
+/// Three spectra on the output grid and the 3x3 maps between their coefficients and RGB.
+#[derive(Debug, Clone)]
+struct Basis3 {
+    spectra: [Vec<f32>; 3],
+    y: [f64; 3],
+    /// Columns: linear RGB of each spectrum.
+    rgb: Matrix3<f64>,
+    /// rgb^-1: coefficients of a (true) RGB.
+    inv: Matrix3<f64>,
+    peak: [f64; 3],
+}
+
+impl Basis3 {
+    fn new(spectra: [Spectrum; 3], y: [f64; 3], rgb: Matrix3<f64>) -> Option<Basis3> {
+        let sv = rgb.singular_values();
+        let (hi, lo) = (sv.max(), sv.min());
+        if !(lo > 0.0 && hi / lo <= CONDITION_LIMIT) {
+            return None;
+        }
+        let inv = rgb.try_inverse()?;
+        let peak = spectra
+            .each_ref()
+            .map(|s| s.values().iter().fold(0f64, |m, v| m.max(v.abs())));
+        Some(Basis3 {
+            spectra: spectra.map(|s| s.values().iter().map(|&v| v as f32).collect()),
+            y,
+            rgb,
+            inv,
+            peak,
+        })
+    }
+
+    /// Writes `sum a_j B_j` into `out` and returns whether it is negative somewhere.
+    fn write(&self, a: &Vector3<f64>, out: &mut [f32]) -> bool {
+        write_combination(&self.spectra, a, out)
+    }
+
+    fn luminance(&self, a: &Vector3<f64>) -> f64 {
+        (0..3).map(|j| a[j] * self.y[j]).sum()
+    }
+
+    fn bound(&self, a: &Vector3<f64>) -> f64 {
+        (0..3).map(|j| a[j].abs() * self.peak[j]).sum()
+    }
+}
 
 /// Everything needed to turn one pixel into a spectrum.
 #[derive(Debug, Clone)]
 pub struct Engine {
     grid: WavelengthGrid,
     upsampler: Upsampler,
+    model: Model,
     /// B_j = MCC_j * S * k on the output grid, k making Y(S) = 1.
     basis: [Vec<f32>; 3],
     /// Luminance of each basis spectrum.
@@ -25,8 +200,12 @@ pub struct Engine {
     basis_rgb: Matrix3<f64>,
     /// The main light's RGB at Y = 1: the white balance the paper's premise implies.
     light_rgb: Vector3<f64>,
-    /// The sun's SPD at Y = 1 and its RGB.
+    /// The sun's SPD at Y = 1 and its RGB (true, D65-referenced).
     sun: Option<(Vec<f32>, Vector3<f64>)>,
+    /// The CIE daylight basis (when sky pixels take it).
+    daylight: Option<Basis3>,
+    /// The main light times (1, x, x^2) (when the model is smooth and the light can carry it).
+    smooth: Option<Basis3>,
     /// RGB -> luminance row of the space.
     y_row: [f64; 3],
     /// RGB -> XYZ (x100, as `RgbSpace::xyz_from_rgb`), computed once: the round trip needs it
@@ -38,20 +217,46 @@ pub struct Engine {
 /// What one pixel became.
 #[derive(Debug, Clone, Copy)]
 pub struct PixelResult {
-    /// Linear RGB of the written spectrum, white-balanced to the main light (compare with input).
+    /// Linear RGB of the written spectrum, under the white premise (compare with the input).
     pub rgb_back: [f64; 3],
     /// The spectrum's luminance.
     pub luminance: f64,
+    /// The written spectrum goes below zero somewhere.
+    pub negative: bool,
+    /// Which spectrum the pixel got.
+    pub took: Took,
+}
+
+/// Which spectrum a pixel got.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Took {
+    Sun,
+    Daylight,
+    Smooth,
+    Colorchecker,
 }
 
 impl Engine {
-    /// `fit` gives the mode, basis reflectances and main light (on its own grid); `grid` is the
-    /// output grid; `sun_spd` the sun's SPD if sun pixels are to be replaced.
+    /// The paper's model (ColorChecker basis, light premise). `fit` gives the mode, basis
+    /// reflectances and main light (on its own grid); `grid` is the output grid; `sun_spd` the
+    /// sun's SPD if sun pixels are to be replaced.
     pub fn new(
         fit: &Fit,
         grid: WavelengthGrid,
         rule: Rule,
         sun_spd: Option<&Tabulated>,
+    ) -> Result<Engine> {
+        let sun = sun_spd.map_or(SunSource::None, SunSource::Spd);
+        Engine::with_model(fit, grid, rule, sun, Model::PAPER)
+    }
+
+    /// An engine following `model`.
+    pub fn with_model(
+        fit: &Fit,
+        grid: WavelengthGrid,
+        rule: Rule,
+        sun_source: SunSource,
+        model: Model,
     ) -> Result<Engine> {
         let space = fit.rgb_space();
         let fit_grid = fit.grid;
@@ -78,6 +283,7 @@ impl Engine {
             )));
         }
         let light = light.scaled(1.0 / light_y);
+        let light_rgb = rgb_of(&light)?;
         let mut basis: [Vec<f32>; 3] = Default::default();
         let mut basis_y = [0.0; 3];
         let mut basis_rgb = Matrix3::zeros();
@@ -87,8 +293,53 @@ impl Engine {
             basis_rgb.set_column(j, &rgb_of(&b)?);
             basis[j] = b.values().iter().map(|&v| v as f32).collect();
         }
-        let sun = match sun_spd {
-            Some(t) => {
+        // A set of three spectra as a Basis3 (None when they cannot carry every colour).
+        let basis3 = |spectra: [Spectrum; 3]| -> Result<Option<Basis3>> {
+            let mut y = [0.0; 3];
+            let mut rgb = Matrix3::zeros();
+            for j in 0..3 {
+                y[j] = luminance_of(&spectra[j])?;
+                rgb.set_column(j, &rgb_of(&spectra[j])?);
+            }
+            Ok(Basis3::new(spectra, y, rgb))
+        };
+        let need_daylight = model.sky_daylight || matches!(sun_source, SunSource::DaylightFit(_));
+        let daylight = if need_daylight {
+            let [s0, s1, s2] =
+                illuminant::daylight_components()?.map(|t| t.resample(&grid, Interpolation::LIGHT));
+            // Scaled to Y ~ 1 each (S1 and S2 have little luminance: their own scale would do).
+            let k = 1.0 / luminance_of(&s0)?;
+            basis3([s0.scaled(k), s1.scaled(k), s2.scaled(k)])?
+        } else {
+            None
+        };
+        let smooth = if model.smooth {
+            let x = |i: usize| (grid.wavelength_nm(i) - SMOOTH_CENTRE_NM) / SMOOTH_HALF_WIDTH_NM;
+            let with = |p: i32| -> Result<Spectrum> {
+                let v = (0..grid.len())
+                    .map(|i| light.values()[i] * x(i).powi(p))
+                    .collect();
+                Spectrum::new(grid, v)
+            };
+            basis3([with(0)?, with(1)?, with(2)?])?
+        } else {
+            None
+        };
+        // Daylight sky only under a daylight main light: a lamp whose white happens to lie on the
+        // daylight locus (FL2, 4200 K) lights walls of daylight colour that are not daylight.
+        let is_daylight = match &daylight {
+            Some(d) => daylight_residual(&light, d) <= DAYLIGHT_RESIDUAL,
+            None => false,
+        };
+        let premise = |rgb: [f64; 3]| -> Vector3<f64> {
+            match model.white {
+                WhitePremise::Light => Vector3::from(rgb).component_mul(&light_rgb),
+                WhitePremise::D65 => Vector3::from(rgb),
+            }
+        };
+        let sun = match sun_source {
+            SunSource::None => None,
+            SunSource::Spd(t) => {
                 let s = t.resample(&grid, Interpolation::LIGHT);
                 let y = luminance_of(&s)?;
                 if !y.is_finite() || y <= 0.0 {
@@ -100,17 +351,40 @@ impl Engine {
                 let rgb = rgb_of(&s)?;
                 Some((s.values().iter().map(|&v| v as f32).collect(), rgb))
             }
-            None => None,
+            SunSource::DaylightFit(rgb) => {
+                let d = daylight.as_ref().ok_or_else(|| {
+                    Error::invalid("the CIE daylight basis is singular on the output grid")
+                })?;
+                let r = premise(rgb);
+                let a = d.inv * r;
+                let y = d.luminance(&a);
+                if !y.is_finite() || y <= 0.0 {
+                    return Err(Error::invalid(format!(
+                        "the sun's mean colour {rgb:?} has no luminance: no daylight matches it"
+                    )));
+                }
+                let a = a / y;
+                let mut s = vec![0f32; grid.len()];
+                d.write(&a, &mut s);
+                Some((s, d.rgb * a))
+            }
         };
         let m = space.to_xyz_matrix();
         Ok(Engine {
             grid,
             upsampler: Upsampler::new(fit, &space),
+            model,
             basis,
             basis_y,
             basis_rgb,
-            light_rgb: rgb_of(&light)?,
+            light_rgb,
             sun,
+            daylight: if model.sky_daylight && is_daylight {
+                daylight
+            } else {
+                None
+            },
+            smooth,
             y_row: [m[(1, 0)], m[(1, 1)], m[(1, 2)]],
             to_xyz: m * 100.0,
             white: space.xyz_from_rgb([1.0, 1.0, 1.0]),
@@ -119,6 +393,22 @@ impl Engine {
 
     pub fn grid(&self) -> &WavelengthGrid {
         &self.grid
+    }
+
+    pub fn model(&self) -> Model {
+        self.model
+    }
+
+    /// Whether daylight-coloured sky pixels take the daylight basis (the model asks for it and
+    /// the main light is daylight).
+    pub fn sky_daylight_active(&self) -> bool {
+        self.daylight.is_some()
+    }
+
+    /// Whether the smooth modulation is in use (the model asks for it and the light can carry
+    /// every colour with it: not a near-monochromatic lamp).
+    pub fn smooth_active(&self) -> bool {
+        self.smooth.is_some()
     }
 
     /// The basis spectra on the output grid (for the compact `basis` output).
@@ -136,6 +426,15 @@ impl Engine {
         self.light_rgb.into()
     }
 
+    /// The RGB that the round trip divides by: the main light's under the light premise, white
+    /// under the D65 premise (the `specmap.lightRGB` attribute `roundtrip` reads).
+    pub fn white_balance(&self) -> [f64; 3] {
+        match self.model.white {
+            WhitePremise::Light => self.light_rgb.into(),
+            WhitePremise::D65 => [1.0; 3],
+        }
+    }
+
     /// Luminance of a linear RGB pixel in the fit's space.
     pub fn luminance(&self, rgb: [f32; 3]) -> f64 {
         self.y_row[0] * rgb[0] as f64
@@ -143,12 +442,47 @@ impl Engine {
             + self.y_row[2] * rgb[2] as f64
     }
 
+    /// The ColorChecker-basis coefficients of a pixel under the white premise.
+    fn colorchecker(&self, rgb: [f32; 3]) -> [f64; 3] {
+        let rgb = [rgb[0] as f64, rgb[1] as f64, rgb[2] as f64];
+        let balanced = match self.model.white {
+            WhitePremise::Light => rgb,
+            WhitePremise::D65 => [
+                rgb[0] / self.light_rgb[0],
+                rgb[1] / self.light_rgb[1],
+                rgb[2] / self.light_rgb[2],
+            ],
+        };
+        self.upsampler.coefficients(balanced)
+    }
+
+    /// The pixel's true (D65-referenced) RGB.
+    fn true_rgb(&self, rgb: [f32; 3]) -> Vector3<f64> {
+        let v = Vector3::new(rgb[0] as f64, rgb[1] as f64, rgb[2] as f64);
+        match self.model.white {
+            WhitePremise::Light => v.component_mul(&self.light_rgb),
+            WhitePremise::D65 => v,
+        }
+    }
+
+    /// Whether a true RGB is daylight-coloured: its xy within [`SKY_LOCUS_TOLERANCE`] of the
+    /// daylight locus, between the x of [`SKY_LOCUS_X`].
+    pub fn is_daylight_coloured(&self, r: &Vector3<f64>) -> bool {
+        let xyz = self.to_xyz * r;
+        let sum = xyz.sum();
+        if !(xyz[1] > 0.0 && sum > 0.0) {
+            return false;
+        }
+        let (x, y) = (xyz[0] / sum, xyz[1] / sum);
+        (SKY_LOCUS_X.0..=SKY_LOCUS_X.1).contains(&x)
+            && (y - illuminant::daylight_locus_y(x)).abs() <= SKY_LOCUS_TOLERANCE
+    }
+
     /// The basis coefficients of a pixel, and whether it is a sun pixel: `(c_R, c_G, c_B, s)`,
-    /// where the spectrum is `sum c_j B_j + s * SUN` (the compact form the renderer loads).
+    /// where the spectrum is `sum c_j B_j + s * SUN` (the compact form the renderer loads), on
+    /// the ColorChecker basis whatever the model (the `basis` format's content).
     pub fn coefficients(&self, rgb: [f32; 3], is_sun: bool) -> [f64; 4] {
-        let a = self
-            .upsampler
-            .coefficients([rgb[0] as f64, rgb[1] as f64, rgb[2] as f64]);
+        let a = self.colorchecker(rgb);
         if is_sun && self.sun.is_some() {
             let y: f64 = (0..3).map(|j| a[j] * self.basis_y[j]).sum();
             [0.0, 0.0, 0.0, y.max(0.0)]
@@ -157,34 +491,90 @@ impl Engine {
         }
     }
 
+    /// An upper bound of the absolute values the pixel's spectrum takes.
+    pub fn bound(&self, rgb: [f32; 3], kind: PixelKind) -> f64 {
+        if kind == PixelKind::Sun {
+            if let Some((s, _)) = &self.sun {
+                let peak = s.iter().fold(0f32, |m, &v| m.max(v.abs())) as f64;
+                return self.coefficients(rgb, true)[3] * peak;
+            }
+        }
+        let a = Vector3::from(self.colorchecker(rgb));
+        let peak = |b: &[f32]| b.iter().fold(0f32, |m, &v| m.max(v.abs())) as f64;
+        let mut bound: f64 = (0..3).map(|j| a[j].abs() * peak(&self.basis[j])).sum();
+        let r = self.true_rgb(rgb);
+        for b in [&self.daylight, &self.smooth].into_iter().flatten() {
+            bound = bound.max(b.bound(&(b.inv * r)));
+        }
+        bound
+    }
+
     /// Writes the pixel's spectral radiance into `out` (one value per output wavelength) and
     /// returns its RGB back and luminance.
-    pub fn spectrum(&self, rgb: [f32; 3], is_sun: bool, out: &mut [f32]) -> PixelResult {
-        let c = self.coefficients(rgb, is_sun);
-        let back = match (&self.sun, c[3] > 0.0) {
-            (Some((sun, sun_rgb)), true) => {
-                let s = c[3] as f32;
-                for (o, v) in out.iter_mut().zip(sun) {
-                    *o = s * v;
-                }
-                sun_rgb * c[3]
-            }
-            _ => {
-                let (a0, a1, a2) = (c[0] as f32, c[1] as f32, c[2] as f32);
-                for (i, o) in out.iter_mut().enumerate() {
-                    *o = a0 * self.basis[0][i] + a1 * self.basis[1][i] + a2 * self.basis[2][i];
-                }
-                self.basis_rgb * Vector3::new(c[0], c[1], c[2])
+    pub fn spectrum(&self, rgb: [f32; 3], kind: PixelKind, out: &mut [f32]) -> PixelResult {
+        let premise_back = |back: Vector3<f64>| -> [f64; 3] {
+            match self.model.white {
+                WhitePremise::Light => back.component_div(&self.light_rgb).into(),
+                WhitePremise::D65 => back.into(),
             }
         };
-        let luminance = if c[3] > 0.0 {
-            c[3]
-        } else {
-            (0..3).map(|j| c[j] * self.basis_y[j]).sum()
-        };
+        if kind == PixelKind::Sun {
+            if let Some((sun, sun_rgb)) = &self.sun {
+                let c = self.coefficients(rgb, true);
+                if c[3] > 0.0 {
+                    let s = c[3] as f32;
+                    for (o, v) in out.iter_mut().zip(sun) {
+                        *o = s * v;
+                    }
+                    return PixelResult {
+                        rgb_back: premise_back(sun_rgb * c[3]),
+                        luminance: c[3],
+                        negative: sun.iter().any(|&v| v < 0.0),
+                        took: Took::Sun,
+                    };
+                }
+            }
+        }
+        let r = self.true_rgb(rgb);
+        if kind != PixelKind::Plain {
+            if let Some(d) = &self.daylight {
+                if self.is_daylight_coloured(&r) {
+                    let a = d.inv * r;
+                    let negative = d.write(&a, out);
+                    return PixelResult {
+                        rgb_back: premise_back(d.rgb * a),
+                        luminance: d.luminance(&a),
+                        negative,
+                        took: Took::Daylight,
+                    };
+                }
+            }
+        }
+        let mcc = Vector3::from(self.colorchecker(rgb));
+        if let Some(s) = &self.smooth {
+            let a = s.inv * r;
+            // The ColorChecker basis only where it stays non-negative and the smooth one does
+            // not; otherwise the smooth one, the less negative of the two.
+            let negative = s.write(&a, out);
+            let use_smooth = !negative || {
+                let cc = relative_min(&self.basis, &mcc);
+                cc < -NEGATIVE_TOLERANCE && cc <= relative_min(&s.spectra, &a)
+            };
+            if use_smooth {
+                return PixelResult {
+                    rgb_back: premise_back(s.rgb * a),
+                    luminance: s.luminance(&a),
+                    negative,
+                    took: Took::Smooth,
+                };
+            }
+        }
+        let negative = write_combination(&self.basis, &mcc, out);
         PixelResult {
-            rgb_back: back.component_div(&self.light_rgb).into(),
-            luminance,
+            rgb_back: premise_back(self.basis_rgb * mcc),
+            luminance: (0..3).map(|j| mcc[j] * self.basis_y[j]).sum(),
+            negative,
+            took: Took::Colorchecker,
         }
     }
 
@@ -212,27 +602,178 @@ mod tests {
     use crate::data;
     use crate::fit::{fit, FitInput, Mode, PAPER_BASIS};
 
-    fn engine(light: &str, mode: Mode, grid: &str, sun: bool) -> Engine {
-        let grid: WavelengthGrid = grid.parse().unwrap();
+    fn fitted(light: &str, mode: Mode, grid: &WavelengthGrid) -> Fit {
         let input = FitInput::from_names(
             light,
             PAPER_BASIS,
-            &grid,
+            grid,
             Observer::Cie1931,
             Rule::Riemann,
             RgbSpace::SRGB,
         )
         .unwrap();
-        let f = fit(&input, mode).unwrap();
+        fit(&input, mode).unwrap()
+    }
+
+    fn engine(light: &str, mode: Mode, grid: &str, sun: bool) -> Engine {
+        let grid: WavelengthGrid = grid.parse().unwrap();
+        let f = fitted(light, mode, &grid);
         let d65 = data::spectrum("D65").unwrap().data;
         Engine::new(&f, grid, Rule::Riemann, sun.then_some(&d65)).unwrap()
+    }
+
+    const FAITHFUL: Model = Model {
+        white: WhitePremise::D65,
+        sky_daylight: true,
+        smooth: true,
+    };
+
+    fn faithful(light: &str, model: Model, sun: SunSource) -> Engine {
+        let grid: WavelengthGrid = "380:780:5".parse().unwrap();
+        let f = fitted(light, Mode::Exact, &grid);
+        Engine::with_model(&f, grid, Rule::Riemann, sun, model).unwrap()
+    }
+
+    /// Linear sRGB (Y = luminance) of a spectrum on the engine's grid, and the spectrum there.
+    fn rgb_and_values(e: &Engine, t: &Tabulated) -> ([f32; 3], Vec<f64>) {
+        let s = t.resample(e.grid(), Interpolation::LIGHT);
+        let cmfs = Cmfs::new(Observer::Cie1931, e.grid()).unwrap();
+        let n = cmfs.y.integrate(Rule::Riemann);
+        let [x, y, z] = cmfs.integrate(&s, Rule::Riemann).unwrap();
+        let xyz = Xyz::new(100.0 * x / n, 100.0 * y / n, 100.0 * z / n);
+        let rgb = RgbSpace::SRGB.rgb_from_xyz(xyz).map(|v| v as f32);
+        (rgb, s.values().to_vec())
+    }
+
+    /// `a` is `b` up to a scale, to `tol` of its peak.
+    fn assert_proportional(a: &[f32], b: &[f64], tol: f64, what: &str) {
+        let peak = b.iter().fold(0f64, |m, v| m.max(v.abs()));
+        let k = a.iter().map(|&v| v as f64).sum::<f64>() / b.iter().sum::<f64>();
+        for (i, (&x, &y)) in a.iter().zip(b).enumerate() {
+            assert!(
+                (x as f64 - k * y).abs() <= tol * k * peak,
+                "{what}: band {i}: {x} vs {}",
+                k * y
+            );
+        }
+    }
+
+    #[test]
+    fn daylight_coloured_sky_pixels_are_the_cie_daylight_of_their_colour() {
+        let e = faithful("D65", FAITHFUL, SunSource::None);
+        assert!(e.sky_daylight_active());
+        let mut out = vec![0f32; e.grid().len()];
+        for k in [4500.0, 6504.0, 12000.0, 20000.0] {
+            let (rgb, d) = rgb_and_values(&e, &illuminant::daylight(k).unwrap());
+            let r = e.spectrum(rgb, PixelKind::Sky, &mut out);
+            assert_eq!(r.took, Took::Daylight, "{k} K");
+            assert!(!r.negative);
+            assert_proportional(&out, &d, 1e-4, &format!("daylight {k} K"));
+            assert!(e.round_trip_error(rgb, r.rgb_back) < 1e-3);
+            // Below the horizon the same colour is ground lit by daylight: the smooth model.
+            let r = e.spectrum(rgb, PixelKind::Plain, &mut out);
+            assert_eq!(r.took, Took::Smooth);
+        }
+        // A saturated sky pixel is not daylight.
+        let r = e.spectrum([0.1, 0.8, 0.1], PixelKind::Sky, &mut out);
+        assert_ne!(r.took, Took::Daylight);
+    }
+
+    #[test]
+    fn only_a_daylight_main_light_turns_sky_pixels_into_daylight() {
+        // FL2's white lies on the daylight locus, but its walls are not daylight.
+        for (light, daylight) in [("D65", true), ("D50", true), ("FL2", false), ("A", false)] {
+            let e = faithful(light, FAITHFUL, SunSource::None);
+            assert_eq!(e.sky_daylight_active(), daylight, "{light}");
+        }
+    }
+
+    #[test]
+    fn a_pixel_of_the_lights_colour_is_the_light_under_the_smooth_model() {
+        for light in ["FL2", "FL11", "hps", "A"] {
+            let spd = data::spectrum(light).unwrap().data;
+            // D65 premise: the light's own RGB.
+            let e = faithful(light, FAITHFUL, SunSource::None);
+            assert!(e.smooth_active(), "{light}");
+            let (rgb, l) = rgb_and_values(&e, &spd);
+            let mut out = vec![0f32; e.grid().len()];
+            let r = e.spectrum(rgb, PixelKind::Plain, &mut out);
+            assert_eq!(r.took, Took::Smooth);
+            assert_proportional(&out, &l, 1e-4, light);
+            // Light premise: RGB (1,1,1).
+            let e = faithful(
+                light,
+                Model {
+                    white: WhitePremise::Light,
+                    ..FAITHFUL
+                },
+                SunSource::None,
+            );
+            let r = e.spectrum([2.0; 3], PixelKind::Plain, &mut out);
+            assert_proportional(&out, &l, 1e-4, light);
+            assert!((r.luminance - 2.0).abs() < 1e-9);
+        }
+        // Low-pressure sodium is too narrow to carry every colour with a smooth modulation.
+        assert!(!faithful("lps", FAITHFUL, SunSource::None).smooth_active());
+    }
+
+    /// A grey card lit by a sodium lamp, in a D65-referenced map, is orange: under the D65
+    /// premise it is the lamp's SPD; under the light premise the same RGB is taken as balanced
+    /// to the lamp, so the lamp's colour is applied twice.
+    #[test]
+    fn an_orange_lamp_lit_grey_depends_on_the_white_premise() {
+        let hps = data::spectrum("hps").unwrap().data;
+        let d65 = faithful("hps", FAITHFUL, SunSource::None);
+        let (grey, l) = rgb_and_values(&d65, &hps);
+        let mut out = vec![0f32; d65.grid().len()];
+        let r = d65.spectrum(grey, PixelKind::Plain, &mut out);
+        assert_proportional(&out, &l, 1e-4, "d65 premise");
+        assert!(d65.round_trip_error(grey, r.rgb_back) < 1e-3);
+        let light = faithful(
+            "hps",
+            Model {
+                white: WhitePremise::Light,
+                ..FAITHFUL
+            },
+            SunSource::None,
+        );
+        let r = light.spectrum(grey, PixelKind::Plain, &mut out);
+        // Its round trip still returns the input under its own premise...
+        assert!(light.round_trip_error(grey, r.rgb_back) < 1e-3);
+        // ...but the spectrum is redder than the lamp: its x is well beyond the lamp's.
+        let xy = |rgb: [f64; 3]| RgbSpace::SRGB.xyz_from_rgb(rgb).xy();
+        let lamp_xy = xy(grey.map(|v| v as f64));
+        let true_rgb: [f64; 3] = light.true_rgb(grey).into();
+        assert!(xy(true_rgb)[0] > lamp_xy[0] + 0.05, "{true_rgb:?}");
+        assert_eq!(light.white_balance(), light.light_rgb());
+        assert_eq!(d65.white_balance(), [1.0; 3]);
+    }
+
+    #[test]
+    fn the_sun_gets_the_daylight_of_its_own_colour() {
+        // A low sun, warmer than CIE daylight's 4000 K: the family still reproduces its colour.
+        for k in [2700.0, 3500.0, 5000.0, 6504.0] {
+            let (rgb, _) = {
+                let e = faithful("D65", FAITHFUL, SunSource::None);
+                rgb_and_values(&e, &illuminant::natural(k).unwrap())
+            };
+            let mean = rgb.map(|v| v as f64 * 1000.0);
+            let e = faithful("D65", FAITHFUL, SunSource::DaylightFit(mean));
+            let mut out = vec![0f32; e.grid().len()];
+            let px = rgb.map(|v| v * 5000.0);
+            let r = e.spectrum(px, PixelKind::Sun, &mut out);
+            assert_eq!(r.took, Took::Sun);
+            assert!(e.round_trip_error(px, r.rgb_back) < 1e-3, "{k} K");
+            assert!(!r.negative, "{k} K");
+            assert!((r.luminance / e.luminance(px) - 1.0).abs() < 1e-6);
+        }
     }
 
     #[test]
     fn white_under_d65_is_d65_at_unit_luminance() {
         let e = engine("D65", Mode::Exact, "380:780:5", false);
         let mut out = vec![0.0f32; e.grid().len()];
-        let r = e.spectrum([1.0, 1.0, 1.0], false, &mut out);
+        let r = e.spectrum([1.0, 1.0, 1.0], PixelKind::Plain, &mut out);
         assert!((r.luminance - 1.0).abs() < 1e-9, "{}", r.luminance);
         // White's spectrum is sum_j w_j MCC_j D65: its colour, not its shape, is D65's, so it
         // integrates back to white and stays positive.
@@ -265,7 +806,7 @@ mod tests {
                 [1e4, 2e4, 5e3],
                 [1e-6, 2e-6, 1e-6],
             ] {
-                let r = e.spectrum(rgb, false, &mut out);
+                let r = e.spectrum(rgb, PixelKind::Plain, &mut out);
                 let de = e.round_trip_error(rgb, r.rgb_back);
                 // f32 spectra: the error is rounding only.
                 assert!(de < 1e-3, "{light} {rgb:?}: {de}");
@@ -279,8 +820,8 @@ mod tests {
         let mut plain = vec![0.0f32; e.grid().len()];
         let mut sunny = vec![0.0f32; e.grid().len()];
         let rgb = [500.0, 400.0, 300.0];
-        let a = e.spectrum(rgb, false, &mut plain);
-        let b = e.spectrum(rgb, true, &mut sunny);
+        let a = e.spectrum(rgb, PixelKind::Plain, &mut plain);
+        let b = e.spectrum(rgb, PixelKind::Sun, &mut sunny);
         assert!((a.luminance - b.luminance).abs() < 1e-9 * a.luminance);
         let sun = e.sun_spectrum().unwrap();
         for (s, v) in sunny.iter().zip(sun) {

@@ -7,6 +7,7 @@
 
 use crate::colorimetry::{cct, Cct, Cmfs, Observer, RgbSpace, Xyz};
 use crate::data;
+use crate::envmap::engine::WhitePremise;
 use crate::envmap::layout::EnvMap;
 use crate::envmap::sun::SunSearch;
 use crate::error::Result;
@@ -33,8 +34,9 @@ pub struct LightChoice {
     pub bright_cct: Cct,
 }
 
-/// Chooses the main light of `map` (linear RGB in `space`).
-pub fn choose(map: &EnvMap, sun: &SunSearch, space: &RgbSpace) -> Result<LightChoice> {
+/// The energy-weighted mean linear RGB of a map's brightest regions: its brightest pixels that
+/// together carry [`BRIGHT_SHARE`] of its energy (luminance x solid angle).
+pub fn bright_regions(map: &EnvMap, space: &RgbSpace) -> [f64; 3] {
     let img = &map.image;
     let m = space.to_xyz_matrix();
     // Energy (luminance x solid angle) of every pixel, brightest first.
@@ -67,6 +69,12 @@ pub fn choose(map: &EnvMap, sun: &SunSearch, space: &RgbSpace) -> Result<LightCh
         }
         taken += e;
     }
+    rgb
+}
+
+/// Chooses the main light of `map` (linear RGB in `space`).
+pub fn choose(map: &EnvMap, sun: &SunSearch, space: &RgbSpace) -> Result<LightChoice> {
+    let rgb = bright_regions(map, space);
     let xyz = space.xyz_from_rgb(rgb);
     let bright_xy = xyz.xy();
     let bright_cct = cct(xyz)?;
@@ -129,6 +137,65 @@ pub fn choose(map: &EnvMap, sun: &SunSearch, space: &RgbSpace) -> Result<LightCh
         ),
         bright_xy,
         bright_cct,
+    })
+}
+
+/// What the white premise is, and why.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct WhiteChoice {
+    pub premise: WhitePremise,
+    /// The reason, in words.
+    pub reason: String,
+}
+
+/// Chooses the white premise of `map` for the main light `light` (a spectrum name or CSV): a
+/// map white-balanced to its main light shows that light as neutral, a D65-referenced one shows
+/// it in its own colour. So the brightest regions' chromaticity decides: nearer the light's white
+/// than D65's (CIE 1960 uv), the map is D65-referenced; otherwise it is balanced to the light.
+/// When the light's white is D65's (within 0.002 uv) the two premises are one.
+pub fn choose_white(map: &EnvMap, space: &RgbSpace, light: &str) -> Result<WhiteChoice> {
+    let grid = WavelengthGrid::visible_1nm();
+    let cmfs = Cmfs::new(Observer::Cie1931, &grid)?;
+    let s = data::spectrum(light)?
+        .data
+        .resample(&grid, Interpolation::LIGHT);
+    let light_uv = cmfs.light_xyz(&s, Rule::Riemann)?.uv1960();
+    let d65_uv = Xyz::from_xy(crate::colorimetry::D65_XY).uv1960();
+    let dist = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]);
+    if dist(light_uv, d65_uv) <= 0.002 {
+        return Ok(WhiteChoice {
+            premise: WhitePremise::D65,
+            reason: format!("the main light {light} is D65-white: both premises are one"),
+        });
+    }
+    let rgb = bright_regions(map, space);
+    let xyz = space.xyz_from_rgb(rgb);
+    if xyz.y().is_nan() || xyz.y() <= 0.0 {
+        return Ok(WhiteChoice {
+            premise: WhitePremise::D65,
+            reason: "the map holds no light: RGB taken as D65-referenced".into(),
+        });
+    }
+    let uv = xyz.uv1960();
+    let (to_light, to_d65) = (dist(uv, light_uv), dist(uv, d65_uv));
+    Ok(if to_light < to_d65 {
+        WhiteChoice {
+            premise: WhitePremise::D65,
+            reason: format!(
+                "the brightest regions have the colour of {light} (uv distance {to_light:.4}, \
+                 {to_d65:.4} from D65 white): the map is D65-referenced, not white-balanced to \
+                 its light"
+            ),
+        }
+    } else {
+        WhiteChoice {
+            premise: WhitePremise::Light,
+            reason: format!(
+                "the brightest regions are neutral (uv distance {to_d65:.4} from D65 white, \
+                 {to_light:.4} from {light}): the map is white-balanced to its light, as the \
+                 paper assumes"
+            ),
+        }
     })
 }
 
