@@ -409,21 +409,54 @@ fn basis_and_spectral_maps_light_the_scene_as_the_rgb_map_does() {
         let scene = Preset::Ball.scene(32, 32, "D65", Some(rgb)).unwrap();
         cpu::render(&Prepared::new(&scene, &sp).unwrap())
     };
-    for format in [OutputFormat::Basis, OutputFormat::Spectral] {
-        let out = dir.path().join(format!("{format:?}.exr"));
+    // The spectral file of the command line's default (the faithful method: daylight sky and sun,
+    // smooth spectra) is outside the basis' span; its colours must still come through.
+    for (format, faithful) in [
+        (OutputFormat::Basis, false),
+        (OutputFormat::Spectral, false),
+        (OutputFormat::Spectral, true),
+    ] {
+        let out = dir.path().join(format!("{format:?}{faithful}.exr"));
+        let base = if faithful {
+            ConvertOptions::faithful()
+        } else {
+            ConvertOptions::default()
+        };
         let opts = ConvertOptions {
             format,
             precision: specmap::envmap::exrio::Precision::Float,
-            ..ConvertOptions::default()
+            ..base
         };
         convert(input, &out, &opts, &|_, _| {}).unwrap();
-        let (l, report) = env::load(&out, "D65").unwrap();
+        let (mut l, report) = env::load(&out, "D65").unwrap();
         eprintln!("{report:?}");
+        let reference = if faithful {
+            // The faithful sun has its own colour where the RGB map's is D65 at the pixels'
+            // luminance: compare the environments without the suns, and check the sun apart.
+            assert_eq!(report.sun_spd, "the sun pixels' own spectrum");
+            let d = report.sun_direction.expect("the sun is found");
+            let (rgb_sun, _) = env::load(std::path::Path::new(input), "D65").unwrap();
+            let e = rgb_sun.sun.expect("the RGB map's sun").direction;
+            assert!(
+                (0..3).map(|k| d[k] * e[k]).sum::<f64>() > 0.9999,
+                "{d:?} vs {e:?}"
+            );
+            l.sun = None;
+            let mut rgb_no_sun = rgb_sun;
+            rgb_no_sun.sun = None;
+            let scene = Preset::Ball.scene(32, 32, "D65", Some(rgb_no_sun)).unwrap();
+            cpu::render(&Prepared::new(&scene, &sp).unwrap())
+        } else {
+            reference.clone()
+        };
         let scene = Preset::Ball.scene(32, 32, "D65", Some(l)).unwrap();
         let img = cpu::render(&Prepared::new(&scene, &sp).unwrap());
         let cmp = compare(&reference, &img, &RgbSpace::SRGB).unwrap();
-        eprintln!("{format:?} vs rgb: {cmp:?}");
-        assert!(cmp.mean < 0.5 && cmp.max < 2.0, "{format:?}: {cmp:?}");
+        eprintln!("{format:?} (faithful {faithful}) vs rgb: {cmp:?}");
+        assert!(
+            cmp.mean < 0.5 && cmp.max < 2.0,
+            "{format:?} {faithful}: {cmp:?}"
+        );
     }
 }
 

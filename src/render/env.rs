@@ -535,14 +535,39 @@ fn load_spectral(path: &Path, light: &str) -> Result<(Lighting, EnvReport)> {
             n
         ))
     })?;
+    // Colour-preserving coefficients: the basis combination with the pixel spectrum's XYZ. A
+    // least-squares fit of the spectrum itself would change the colour of any spectrum outside
+    // the basis' span (the faithful method's daylight and smooth spectra are), so the fit is
+    // used only to recognise the sun's pixels.
+    let cmfs = crate::colorimetry::Cmfs::new(Observer::Cie1931, &grid)?;
+    let bar = [cmfs.x.values(), cmfs.y.values(), cmfs.z.values()];
+    let xyz_of = |f: &dyn Fn(usize) -> f64| -> nalgebra::Vector3<f64> {
+        nalgebra::Vector3::from_fn(|k, _| (0..n).map(|i| f(i) * bar[k][i]).sum::<f64>())
+    };
+    let basis_xyz = nalgebra::Matrix3::from_columns(&[
+        xyz_of(&|i| spectra[0][i]),
+        xyz_of(&|i| spectra[1][i]),
+        xyz_of(&|i| spectra[2][i]),
+    ]);
+    let to_coeffs = basis_xyz.try_inverse().ok_or_else(|| {
+        Error::invalid(format!(
+            "{}: the basis spectra have linearly dependent colours on the file's wavelengths",
+            path.display()
+        ))
+    })?;
     let (w, h) = (info.width, info.height);
     let mut c_img = RgbImage::new(w, h);
-    let mut s = vec![0.0; w * h];
+    // The pixels' colours as linear sRGB, to find the sun as `convert` does.
+    let mut preview = RgbImage::new(w, h);
+    let to_rgb = RgbSpace::SRGB.from_xyz_matrix();
+    let y_norm: f64 = bar[1].iter().sum();
+    let mut luminance = vec![0.0; w * h];
     let mut worst = 0.0f64;
     exrio::read_spectral_rows(path, |y, row| {
         let per = row.len() / w;
         for x in 0..w {
             let px = &row[x * per..x * per + n];
+            // How far the spectrum is from the basis' span (reported, not used).
             let b = nalgebra::Vector4::from_fn(|a, _| {
                 (0..n).map(|i| spectra[a][i] * px[i] as f64).sum::<f64>()
             });
@@ -559,13 +584,12 @@ fn load_spectral(path: &Path, light: &str) -> Result<(Lighting, EnvReport)> {
                 worst = worst.max(res / norm);
             }
             let i = y * w + x;
-            // A pixel is the sun's when its projection is mostly on the sun's SPD.
-            let sun_like = c[3] > 0.0 && c[3] > 10.0 * c[0].abs().max(c[1].abs()).max(c[2].abs());
-            if sun_like {
-                s[i] = c[3];
-            } else {
-                c_img.pixels[i] = [c[0] as f32, c[1] as f32, c[2] as f32];
-            }
+            let xyz = xyz_of(&|i| px[i] as f64);
+            let k = to_coeffs * xyz;
+            c_img.pixels[i] = [k[0] as f32, k[1] as f32, k[2] as f32];
+            let rgb = to_rgb * (xyz / y_norm);
+            preview.pixels[i] = [rgb[0] as f32, rgb[1] as f32, rgb[2] as f32];
+            luminance[i] = xyz[1] / y_norm;
         }
     })?;
     let layout = detect(
@@ -577,17 +601,53 @@ fn load_spectral(path: &Path, light: &str) -> Result<(Lighting, EnvReport)> {
         }),
     )
     .map_err(|e| Error::invalid(format!("{}: {e}", path.display())))?;
-    let map = EnvMap::new(layout, c_img)
-        .map_err(|e| Error::invalid(format!("{}: {e}", path.display())))?;
+    let bad = |e: Error| Error::invalid(format!("{}: {e}", path.display()));
+    let mut preview = EnvMap::new(layout, preview).map_err(bad)?;
+    sanitize(&mut preview.image);
+    // The sun: its pixels leave the environment and become the directional light, with the
+    // mean of their own spectra as its SPD (a matched sun is not D65).
+    let mut s = vec![0.0; w * h];
+    let mut sun_spd = None;
+    if let Some(found) = find_sun(&preview, &RgbSpace::SRGB, &SunSettings::default()).sun() {
+        let mut is_sun = vec![false; w * h];
+        for &i in &found.pixels {
+            is_sun[i] = true;
+            s[i] = luminance[i].max(0.0);
+            c_img.pixels[i] = [0.0; 3];
+        }
+        let mut sum = vec![0.0f64; n];
+        exrio::read_spectral_rows(path, |y, row| {
+            let per = row.len() / w;
+            for x in (0..w).filter(|&x| is_sun[y * w + x]) {
+                for (acc, v) in sum.iter_mut().zip(&row[x * per..x * per + n]) {
+                    *acc += *v as f64;
+                }
+            }
+        })?;
+        let y: f64 = (0..n).map(|i| sum[i] * bar[1][i]).sum::<f64>() / y_norm;
+        if y > 0.0 {
+            let spd = Tabulated::new(wl.clone(), sum.iter().map(|v| v / y).collect())?;
+            sun_spd = Some(spd);
+        }
+    }
+    let map = EnvMap::new(layout, c_img).map_err(bad)?;
     let sun = directional(&map, &s);
     let coeffs = to_coefficients(&map, |p| [p[0] as f64, p[1] as f64, p[2] as f64]);
-    let lit = lighting(&light, names, coeffs, sun)?;
+    let mut lit = lighting(&light, names, coeffs, sun)?;
+    let sun_label = match sun_spd {
+        Some(spd) if sun.is_some() => {
+            lit.e_spd = spd;
+            lit.e_label = "the sun pixels' own spectrum".to_string();
+            lit.e_label.clone()
+        }
+        _ => SUN_SPD.to_string(),
+    };
     let report = EnvReport {
         file: path.display().to_string(),
         kind: "spectral",
         input_size: [w, h],
         light,
-        sun_spd: SUN_SPD.into(),
+        sun_spd: sun_label,
         sun_direction: sun.map(|s| s.direction),
         sun_irradiance: sun.map(|s| s.irradiance),
         projection_residual: Some(worst),
