@@ -61,8 +61,28 @@ def test_forest_reads_back_with_colour_science_and_openexr(specmap, tmp_path):
     assert np.percentile(rel, 99.9) < 1e-4 and rel.max() < 1e-3, rel.max()
 
 
-def test_sunrise_sun_pixels_carry_d65(specmap, tmp_path):
+def test_sunrise_sun_pixels_carry_their_own_daylight(specmap, tmp_path):
+    """The default sun SPD: the CIE daylight-family member (S0, S1, S2) of the sun pixels' own
+    colour, checked with colour-science's basis functions and colorimetry."""
+    from colour.colorimetry import SDS_BASIS_FUNCTIONS_CIE_ILLUMINANT_D_SERIES as BASIS
     out = convert(tmp_path, "sunrise", "--precision", "float")
+    _, channels, _ = read_openexr(out)
+    mask = channels["sun"].pixels > 0.5
+    rgb = np.stack([channels[c].pixels for c in "RGB"], -1)[mask].astype(float)
+    _, image = colour.io.read_spectral_image_Fichet2021(str(out))["S0"]
+    assert 1 <= mask.sum() <= 50
+    basis = np.stack([BASIS[k].copy().align(SHAPE).values for k in ("S0", "S1", "S2")], 1)
+    cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].copy().align(SHAPE).values
+    want = colour.XYZ_to_xy(colour.RGB_to_XYZ(rgb.sum(0), colour.RGB_COLOURSPACES["sRGB"],
+                                              apply_cctf_decoding=False))
+    for spectrum in image[mask]:
+        c = np.linalg.lstsq(basis, spectrum, rcond=None)[0]
+        assert np.abs(basis @ c - spectrum).max() < 1e-5 * spectrum.max()
+        np.testing.assert_allclose(colour.XYZ_to_xy(spectrum @ cmfs), want, atol=1e-3)
+
+
+def test_sunrise_sun_pixels_carry_d65_when_asked(specmap, tmp_path):
+    out = convert(tmp_path, "sunrise", "--precision", "float", "--sun-spd", "D65")
     _, channels, _ = read_openexr(out)
     mask = channels["sun"].pixels > 0.5
     _, image = colour.io.read_spectral_image_Fichet2021(str(out))["S0"]
