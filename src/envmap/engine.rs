@@ -112,16 +112,25 @@ fn daylight_residual(light: &Spectrum, d: &Basis3) -> f64 {
     (res / norm).sqrt()
 }
 
+/// Relative difference between a pixel and its round trip below which the CIEDE2000 is taken
+/// as 0 (rounding, not a colour difference).
+const ROUND_TRIP_ZERO: f64 = 1e-12;
+
 /// Writes `sum a_j B_j` into `out` and returns whether it is negative somewhere.
 fn write_combination(spectra: &[Vec<f32>; 3], a: &Vector3<f64>, out: &mut [f32]) -> bool {
     let (a0, a1, a2) = (a[0] as f32, a[1] as f32, a[2] as f32);
-    let (mut lo, mut hi) = (0f32, 0f32);
-    for (i, o) in out.iter_mut().enumerate() {
-        let v = a0 * spectra[0][i] + a1 * spectra[1][i] + a2 * spectra[2][i];
-        *o = v;
-        lo = lo.min(v);
-        hi = hi.max(v);
+    // Zipped slices (no bounds checks) and a separate min/max pass: both vectorise.
+    for (((o, &b0), &b1), &b2) in out
+        .iter_mut()
+        .zip(&spectra[0])
+        .zip(&spectra[1])
+        .zip(&spectra[2])
+    {
+        *o = a0 * b0 + a1 * b1 + a2 * b2;
     }
+    let (lo, hi) = out
+        .iter()
+        .fold((0f32, 0f32), |(lo, hi), &v| (lo.min(v), hi.max(v)));
     lo < -(NEGATIVE_TOLERANCE as f32) * hi
 }
 
@@ -196,12 +205,16 @@ pub struct Engine {
     basis: [Vec<f32>; 3],
     /// Luminance of each basis spectrum.
     basis_y: [f64; 3],
+    /// Largest absolute value of each basis spectrum (for [`Engine::bound`]).
+    basis_peak: [f64; 3],
     /// Linear RGB of each basis spectrum (columns).
     basis_rgb: Matrix3<f64>,
     /// The main light's RGB at Y = 1: the white balance the paper's premise implies.
     light_rgb: Vector3<f64>,
     /// The sun's SPD at Y = 1 and its RGB (true, D65-referenced).
     sun: Option<(Vec<f32>, Vector3<f64>)>,
+    /// Largest absolute value of the sun's SPD.
+    sun_peak: f64,
     /// The CIE daylight basis (when sky pixels take it).
     daylight: Option<Basis3>,
     /// The main light times (1, x, x^2) (when the model is smooth and the light can carry it).
@@ -370,14 +383,17 @@ impl Engine {
             }
         };
         let m = space.to_xyz_matrix();
+        let peak = |b: &[f32]| b.iter().fold(0f32, |m, &v| m.max(v.abs())) as f64;
         Ok(Engine {
             grid,
             upsampler: Upsampler::new(fit, &space),
             model,
+            basis_peak: basis.each_ref().map(|b| peak(b)),
             basis,
             basis_y,
             basis_rgb,
             light_rgb,
+            sun_peak: sun.as_ref().map_or(0.0, |(s, _)| peak(s)),
             sun,
             daylight: if model.sky_daylight && is_daylight {
                 daylight
@@ -444,16 +460,20 @@ impl Engine {
 
     /// The ColorChecker-basis coefficients of a pixel under the white premise.
     fn colorchecker(&self, rgb: [f32; 3]) -> [f64; 3] {
+        self.upsampler.coefficients(self.balanced(rgb))
+    }
+
+    /// A pixel balanced to the main light, as the fit takes it.
+    fn balanced(&self, rgb: [f32; 3]) -> [f64; 3] {
         let rgb = [rgb[0] as f64, rgb[1] as f64, rgb[2] as f64];
-        let balanced = match self.model.white {
+        match self.model.white {
             WhitePremise::Light => rgb,
             WhitePremise::D65 => [
                 rgb[0] / self.light_rgb[0],
                 rgb[1] / self.light_rgb[1],
                 rgb[2] / self.light_rgb[2],
             ],
-        };
-        self.upsampler.coefficients(balanced)
+        }
     }
 
     /// The pixel's true (D65-referenced) RGB.
@@ -491,17 +511,33 @@ impl Engine {
         }
     }
 
-    /// An upper bound of the absolute values the pixel's spectrum takes.
-    pub fn bound(&self, rgb: [f32; 3], kind: PixelKind) -> f64 {
-        if kind == PixelKind::Sun {
-            if let Some((s, _)) = &self.sun {
-                let peak = s.iter().fold(0f32, |m, &v| m.max(v.abs())) as f64;
-                return self.coefficients(rgb, true)[3] * peak;
-            }
+    /// The ColorChecker coefficients' upper bounds (see [`Upsampler::coefficient_bound`]): the
+    /// exact coefficients' magnitudes but for `nonneg` pixels outside the cone, which are not
+    /// searched.
+    fn colorchecker_bound(&self, rgb: [f32; 3]) -> [f64; 3] {
+        self.upsampler.coefficient_bound(self.balanced(rgb))
+    }
+
+    /// An upper bound of the largest magnitude among a pixel's `coefficients` (the `basis`
+    /// format's values), without the `nonneg` search.
+    pub fn coefficient_bound(&self, rgb: [f32; 3], is_sun: bool) -> f64 {
+        let a = self.colorchecker_bound(rgb);
+        if is_sun && self.sun.is_some() {
+            (0..3).map(|j| a[j] * self.basis_y[j].abs()).sum()
+        } else {
+            a.iter().fold(0f64, |m, &v| m.max(v))
         }
-        let a = Vector3::from(self.colorchecker(rgb));
-        let peak = |b: &[f32]| b.iter().fold(0f32, |m, &v| m.max(v.abs())) as f64;
-        let mut bound: f64 = (0..3).map(|j| a[j].abs() * peak(&self.basis[j])).sum();
+    }
+
+    /// An upper bound of the absolute values the pixel's spectrum takes (without the `nonneg`
+    /// search).
+    pub fn bound(&self, rgb: [f32; 3], kind: PixelKind) -> f64 {
+        let is_sun = kind == PixelKind::Sun;
+        if is_sun && self.sun.is_some() {
+            return self.coefficient_bound(rgb, true) * self.sun_peak;
+        }
+        let a = self.colorchecker_bound(rgb);
+        let mut bound: f64 = (0..3).map(|j| a[j] * self.basis_peak[j]).sum();
         let r = self.true_rgb(rgb);
         for b in [&self.daylight, &self.smooth].into_iter().flatten() {
             bound = bound.max(b.bound(&(b.inv * r)));
@@ -587,10 +623,21 @@ impl Engine {
         }
         let input = [rgb[0] as f64 / y, rgb[1] as f64 / y, rgb[2] as f64 / y];
         let out = back.map(|v| v / y);
+        // A round trip exact to rounding (the exact and faithful modes) is 0, without the cost
+        // of CIEDE2000: at 1e-12 of the pixel's scale its CIEDE2000 would be below 1e-7.
+        let scale = input.iter().fold(1f64, |m, v| m.max(v.abs()));
+        if (0..3).all(|k| (input[k] - out[k]).abs() <= ROUND_TRIP_ZERO * scale) {
+            return 0.0;
+        }
+        self.delta_e(input, out)
+    }
+
+    /// CIEDE2000 between two linear RGB colours of the fit's space.
+    fn delta_e(&self, a: [f64; 3], b: [f64; 3]) -> f64 {
         let xyz = |v: [f64; 3]| Xyz((self.to_xyz * nalgebra::Vector3::from(v)).into());
         delta_e_2000(
-            Lab::from_xyz(xyz(input), self.white),
-            Lab::from_xyz(xyz(out), self.white),
+            Lab::from_xyz(xyz(a), self.white),
+            Lab::from_xyz(xyz(b), self.white),
         )
     }
 }
@@ -828,5 +875,75 @@ mod tests {
             assert!((s / v - b.luminance as f32).abs() < 1e-3 * b.luminance as f32);
         }
         assert_eq!(e.coefficients(rgb, true)[..3], [0.0, 0.0, 0.0]);
+    }
+
+    #[test]
+    fn round_trips_within_rounding_count_as_zero_and_are_that_small() {
+        // The shortcut in round_trip_error must not hide a real difference: at the threshold,
+        // the full CIEDE2000 of saturated, dark, negative and HDR pixels stays negligible.
+        let e = engine("D65", Mode::Exact, "380:780:5", false);
+        let mut worst = 0f64;
+        for rgb in [
+            [1.0, 1.0, 1.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [0.02, 0.0, 1.0],
+            [-0.1, 0.3, 1.0],
+            [1e-6, 2e-6, 1e-7],
+            [4e4, 1e3, 10.0],
+        ] {
+            let y = e.luminance(rgb);
+            let input = rgb.map(|v| v as f64 / y);
+            let scale = input.iter().fold(1f64, |m, v| m.max(v.abs()));
+            for k in 0..3 {
+                for sign in [-1.0, 1.0] {
+                    let mut out = input;
+                    out[k] += sign * ROUND_TRIP_ZERO * scale;
+                    worst = worst.max(e.delta_e(input, out));
+                    // Half the threshold, to leave room for the rounding of * y / y.
+                    let mut half = input;
+                    half[k] += sign * 0.5 * ROUND_TRIP_ZERO * scale;
+                    assert_eq!(e.round_trip_error(rgb, half.map(|v| v * y)), 0.0);
+                }
+            }
+        }
+        assert!(worst < 1e-7, "CIEDE2000 at the threshold: {worst:e}");
+        // And a difference just above it is measured.
+        let back = [1.0 + 1e-6, 1.0, 1.0];
+        assert!(e.round_trip_error([1.0, 1.0, 1.0], back) > 0.0);
+    }
+
+    #[test]
+    fn the_bound_holds_for_every_mode_without_searching() {
+        // The half-float EV scale comes from `bound`, which skips the nonneg search: it must
+        // still bound what `spectrum` writes, sun pixels included.
+        for mode in [Mode::Paper, Mode::Exact, Mode::Nonneg] {
+            let e = engine("FL2", mode, "380:780:5", true);
+            let mut out = vec![0f32; e.grid().len()];
+            for rgb in [
+                [1.0, 0.0, 0.0],
+                [0.0, 0.2, 3.0],
+                [5e4, 2e4, 1.0],
+                [0.5, 0.5, 0.5],
+            ] {
+                for kind in [PixelKind::Plain, PixelKind::Sky, PixelKind::Sun] {
+                    e.spectrum(rgb, kind, &mut out);
+                    let peak = out.iter().fold(0f64, |m, &v| m.max(v.abs() as f64));
+                    let bound = e.bound(rgb, kind);
+                    assert!(
+                        peak <= bound * (1.0 + 1e-6),
+                        "{mode:?} {rgb:?} {kind:?}: {peak} > {bound}"
+                    );
+                    let c = e.coefficients(rgb, kind == PixelKind::Sun);
+                    let cmax = c.iter().fold(0f64, |m, v| m.max(v.abs()));
+                    let cb = e.coefficient_bound(rgb, kind == PixelKind::Sun);
+                    assert!(
+                        cmax <= cb * (1.0 + 1e-12),
+                        "{mode:?} {rgb:?}: {cmax} > {cb}"
+                    );
+                }
+            }
+        }
     }
 }

@@ -942,9 +942,20 @@ impl SpectralWriter {
     fn check_values(&self, y0: usize, rows: &[f32]) -> Result<()> {
         let limit = if self.half { HALF_MAX } else { f32::MAX };
         let scale = self.scale;
+        let is_bad =
+            |v: f32| !v.is_finite() || (v * scale).abs() > limit || !(v * scale).is_finite();
+        // Checked a scan line at a time in parallel, then the first bad value found in its line.
+        let row_len = self.width * self.per_pixel;
         let bad = rows
-            .iter()
-            .position(|&v| !v.is_finite() || (v * scale).abs() > limit || !(v * scale).is_finite());
+            .par_chunks(row_len.max(1))
+            .position_first(|r| r.iter().any(|&v| is_bad(v)))
+            .and_then(|r| {
+                let start = r * row_len;
+                rows[start..]
+                    .iter()
+                    .position(|&v| is_bad(v))
+                    .map(|i| start + i)
+            });
         if let Some(i) = bad {
             let v = rows[i];
             let pixel = i / self.per_pixel;

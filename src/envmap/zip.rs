@@ -44,13 +44,29 @@ impl ZipEncoder {
         self.split.clear();
         self.split.resize(n, 0);
         let (low, high) = self.split.split_at_mut(n.div_ceil(2));
-        let pairs = raw_le.chunks_exact(2);
-        if let [last] = pairs.remainder() {
-            low[n / 2] = *last;
+        if n % 2 == 1 {
+            low[n / 2] = raw_le[n - 1];
         }
-        for ((l, h), p) in low.iter_mut().zip(high.iter_mut()).zip(pairs) {
-            *l = p[0];
-            *h = p[1];
+        // Sixteen pairs at a time as fixed-size arrays, which the compiler turns into shuffles,
+        // then the rest a pair at a time.
+        let (low, high) = (&mut low[..n / 2], &mut high[..n / 2]);
+        let done = n / 2 / 16 * 16;
+        for ((l, h), p) in low
+            .chunks_exact_mut(16)
+            .zip(high.chunks_exact_mut(16))
+            .zip(raw_le.chunks_exact(32))
+        {
+            let (l, h): (&mut [u8; 16], &mut [u8; 16]) =
+                (l.try_into().unwrap(), h.try_into().unwrap());
+            let p: &[u8; 32] = p.try_into().unwrap();
+            for i in 0..16 {
+                l[i] = p[2 * i];
+                h[i] = p[2 * i + 1];
+            }
+        }
+        for i in done..n / 2 {
+            low[i] = raw_le[2 * i];
+            high[i] = raw_le[2 * i + 1];
         }
         self.delta.clear();
         self.delta.resize(n, 0);
