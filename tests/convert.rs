@@ -132,6 +132,42 @@ fn sunrise_has_a_sun_and_forest_has_none_in_both_layouts() {
 }
 
 #[test]
+fn up_and_rotation_turn_the_map_and_its_sun() {
+    // The sun of sunrise.exr, found after the map is turned, sits where the orientation puts
+    // it: a quarter turn about up takes map (x, y, z) to world (z, y, -x); Z-up takes it to
+    // (x, z, -y), lifting the low sun to about 53 degrees.
+    let d = tempfile::tempdir().unwrap();
+    let sun_dir = |extra: &[&str]| {
+        let out = d.path().join("turned.exr");
+        let mut args = vec![
+            sample("sunrise.exr"),
+            "-o".into(),
+            out.display().to_string(),
+        ];
+        args.extend(extra.iter().map(|s| s.to_string()));
+        args.extend(["--quiet", "--range", "400:700:20"].map(String::from));
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let r = convert_json(&args);
+        assert_eq!(r["sun"]["found"], "true", "{extra:?}: {}", r["sun"]);
+        let v: Vec<f64> = r["sun"]["direction"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        [v[0], v[1], v[2]]
+    };
+    let [x, y, z] = sun_dir(&[]);
+    let close = |a: [f64; 3], b: [f64; 3]| (0..3).all(|i| (a[i] - b[i]).abs() < 0.02);
+    let turned = sun_dir(&["--rotation", "90"]);
+    assert!(close(turned, [z, y, -x]), "{turned:?} vs {:?}", [z, y, -x]);
+    let back = sun_dir(&["--rotation", "-90"]);
+    assert!(close(back, [-z, y, x]), "{back:?}");
+    let z_up = sun_dir(&["--up", "z"]);
+    assert!(close(z_up, [x, z, -y]), "{z_up:?} vs {:?}", [x, z, -y]);
+}
+
+#[test]
 fn output_equal_to_input_is_refused() {
     let d = tempfile::tempdir().unwrap();
     let input = d.path().join("in.exr");

@@ -760,6 +760,38 @@ fn orientation_round_trips_and_z_up() {
     assert!(close(turn.to_world([0.0, 1.0, 0.0]), [0.0, 1.0, 0.0]));
 }
 
+#[test]
+fn oriented_resampling_puts_map_directions_where_the_orientation_says() {
+    // A smooth function in map space, resampled with an orientation: each world direction d
+    // must get the map's value at to_map(d), within the filtering error of the test above.
+    // A sign error in the rotation or the Z-up swap gives errors of order 1.
+    let src = filled(Layout::LatLong, 64, smooth);
+    for (up, rot) in [(Up::Y, 90.0), (Up::Y, -30.0), (Up::Z, 0.0), (Up::Z, 135.0)] {
+        let o = Orientation {
+            up,
+            rotation_deg: rot,
+        };
+        for layout in [Layout::LatLong, Layout::Cube] {
+            let out = src.resample_oriented(layout, 32, &o);
+            let mut worst = 0f32;
+            for (_, y, d, _, v) in out.pixels_with_directions() {
+                if layout == Layout::LatLong && (y == 0 || y + 1 == out.image.height) {
+                    continue; // polar rows: see the test above
+                }
+                let want = smooth(o.to_map(d));
+                for c in 0..3 {
+                    worst = worst.max((v[c] - want[c]).abs());
+                }
+            }
+            assert!(worst < 0.02, "{up:?} {rot}: {layout:?} off by {worst}");
+        }
+    }
+    // The identity changes nothing.
+    let same = src.resample_oriented(Layout::LatLong, 64, &Orientation::default());
+    let plain = src.resample(Layout::LatLong, 64);
+    assert_eq!(same.image.pixels, plain.image.pixels);
+}
+
 /// Throughput on the largest map (not a timed assertion; run with
 /// `cargo test --release --test layout -- --ignored --nocapture`).
 #[test]

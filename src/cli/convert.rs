@@ -8,7 +8,7 @@ use specmap::envmap::convert::{
 };
 use specmap::envmap::engine::WhitePremise;
 use specmap::envmap::exrio::{Compression, Precision};
-use specmap::envmap::layout::Layout;
+use specmap::envmap::layout::{Layout, Orientation, Up};
 use specmap::envmap::sun::{SunSearch, SunSettings};
 use specmap::fit::Fit;
 use std::io::IsTerminal;
@@ -61,6 +61,19 @@ pub struct ConvertArgs {
     /// Output size: lat-long height or cube face size (default: matched to the input).
     #[arg(long)]
     size: Option<usize>,
+    /// The input's up axis: y (OpenEXR, most HDRI sites) or z (a map made for a Z-up world).
+    /// The output is always Y up, as OpenEXR's convention has it.
+    #[arg(long, value_enum, default_value_t = UpArg::Y)]
+    up: UpArg,
+    /// Turn the input about the up axis by DEG degrees, counter-clockwise seen from above
+    /// (+Z towards +X), e.g. to put the sun where a scene expects it. Resamples the map.
+    #[arg(
+        long,
+        value_name = "DEG",
+        default_value_t = 0.0,
+        allow_negative_numbers = true
+    )]
+    rotation: f64,
     /// A named layer of the input (`<layer>.R` ...).
     #[arg(long)]
     layer: Option<String>,
@@ -95,6 +108,12 @@ pub struct ConvertArgs {
     /// Machine-readable summary.
     #[arg(long)]
     json: bool,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum UpArg {
+    Y,
+    Z,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -242,6 +261,13 @@ pub fn run(a: ConvertArgs) -> anyhow::Result<()> {
             OutLayout::Cube => Some(Layout::Cube),
         },
         size: a.size,
+        orientation: Orientation {
+            up: match a.up {
+                UpArg::Y => Up::Y,
+                UpArg::Z => Up::Z,
+            },
+            rotation_deg: a.rotation,
+        },
         grid: a.range,
         format: match a.format {
             FormatArg::Spectral => OutputFormat::Spectral,

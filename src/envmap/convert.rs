@@ -8,7 +8,7 @@ use crate::envmap::exrio::{
     self, spectral_channel_name, AttrValue, ChannelSet, Compression, EnvmapAttr, Precision,
     SpectralLayout, SpectralWriter, HALF_MAX,
 };
-use crate::envmap::layout::{detect, EnvMap, Layout};
+use crate::envmap::layout::{detect, EnvMap, Layout, Orientation};
 use crate::envmap::light::{self, LightChoice, WhiteChoice};
 use crate::envmap::sun::{find_sun, SunSearch, SunSettings};
 use crate::error::{Error, Result};
@@ -119,6 +119,9 @@ pub struct ConvertOptions {
     pub out_layout: Option<Layout>,
     /// Output face size (cube-like) or height (lat-long); None: matched to the input.
     pub size: Option<usize>,
+    /// How the input's directions relate to OpenEXR's (Y up): a Z-up map or a turn about the
+    /// up axis. Anything but the identity resamples the map into OpenEXR's orientation.
+    pub orientation: Orientation,
     pub grid: WavelengthGrid,
     pub format: OutputFormat,
     pub precision: Precision,
@@ -166,6 +169,7 @@ impl Default for ConvertOptions {
             layer: None,
             out_layout: None,
             size: None,
+            orientation: Orientation::default(),
             grid: "380:780:5".parse().expect("a valid grid"),
             format: OutputFormat::Spectral,
             precision: Precision::Half,
@@ -388,9 +392,10 @@ pub fn convert(
     if size == 0 {
         return Err(Error::invalid("--size must be at least 1"));
     }
-    let resampled = out_layout != input_layout || size != in_size;
+    let resampled =
+        out_layout != input_layout || size != in_size || !opts.orientation.is_identity();
     if resampled {
-        map = map.resample(out_layout, size);
+        map = map.resample_oriented(out_layout, size, &opts.orientation);
     }
     let mut notes = Vec::new();
 
@@ -840,10 +845,7 @@ fn value_bound(map: &EnvMap, engine: &Engine, kinds: &[PixelKind], format: Outpu
             let preview = rgb.iter().fold(0f32, |m, &v| m.max(v.abs())) as f64;
             let spectral = match format {
                 OutputFormat::Spectral => engine.bound(rgb, kinds[i]),
-                OutputFormat::Basis => engine
-                    .coefficients(rgb, kinds[i] == PixelKind::Sun)
-                    .iter()
-                    .fold(0f64, |m, v| m.max(v.abs())),
+                OutputFormat::Basis => engine.coefficient_bound(rgb, kinds[i] == PixelKind::Sun),
             };
             spectral.max(preview)
         })

@@ -178,6 +178,22 @@ impl Orientation {
         [c * x + s * z, y, -s * x + c * z]
     }
 
+    /// Whether this is the identity (OpenEXR's own orientation).
+    pub fn is_identity(&self) -> bool {
+        self.up == Up::Y && self.rotation_deg.rem_euclid(360.0) == 0.0
+    }
+
+    /// [`Orientation::to_map`] as a matrix (rows), for use per sample.
+    pub fn to_map_matrix(&self) -> [[f64; 3]; 3] {
+        let col = |d: [f64; 3]| self.to_map(d);
+        let (x, y, z) = (
+            col([1.0, 0.0, 0.0]),
+            col([0.0, 1.0, 0.0]),
+            col([0.0, 0.0, 1.0]),
+        );
+        [[x[0], y[0], z[0]], [x[1], y[1], z[1]], [x[2], y[2], z[2]]]
+    }
+
     /// A world-space direction in map space (the inverse of [`Orientation::to_world`]).
     pub fn to_map(&self, d: [f64; 3]) -> [f64; 3] {
         let (s, c) = self.rotation_deg.to_radians().sin_cos();
@@ -667,6 +683,26 @@ impl EnvMap {
     /// square root of the source-to-destination pixel ratio rounded up (at least 2, at most 64).
     /// Unused cells of a cross are black.
     pub fn resample(&self, layout: Layout, size: usize) -> EnvMap {
+        self.resample_oriented(layout, size, &Orientation::default())
+    }
+
+    /// [`EnvMap::resample`], with this map's directions related to the world's by
+    /// `orientation`: the result is in world (OpenEXR, Y up) orientation, so a Z-up map or one
+    /// turned about the up axis comes out upright and turned back.
+    pub fn resample_oriented(
+        &self,
+        layout: Layout,
+        size: usize,
+        orientation: &Orientation,
+    ) -> EnvMap {
+        let m = orientation.to_map_matrix();
+        let at = |d: [f64; 3]| {
+            self.sample([
+                m[0][0] * d[0] + m[0][1] * d[1] + m[0][2] * d[2],
+                m[1][0] * d[0] + m[1][1] * d[1] + m[1][2] * d[2],
+                m[2][0] * d[0] + m[2][1] * d[1] + m[2][2] * d[2],
+            ])
+        };
         let size = size.max(1);
         let (w, h) = layout.dimensions(size);
         let mut dst = EnvMap {
@@ -706,7 +742,7 @@ impl EnvMap {
                             for &(sl, cl) in &lat_trig[..k] {
                                 for &(so, co) in &lon_trig[x * k..(x + 1) * k] {
                                     // Solid-angle density cos(latitude).
-                                    let v = self.sample([so * cl, sl, co * cl]);
+                                    let v = at([so * cl, sl, co * cl]);
                                     for c in 0..3 {
                                         acc[c] += cl * v[c] as f64;
                                     }
@@ -736,7 +772,7 @@ impl EnvMap {
                                     let r2 = dot(d, d);
                                     // Solid-angle density 1/r^3 on the face plane.
                                     let wt = 1.0 / (r2 * r2.sqrt());
-                                    let v = self.sample(d);
+                                    let v = at(d);
                                     for c in 0..3 {
                                         acc[c] += wt * v[c] as f64;
                                     }
