@@ -768,3 +768,68 @@ fn stream_a_large_image() {
     assert_eq!((count, info.wavelengths_nm.len()), (h, 81));
     eprintln!("read back in {:.1} s", start.elapsed().as_secs_f64());
 }
+
+#[test]
+fn tiled_spectral_files_read_like_scan_lines() {
+    // Spectral EXRs from other tools may be tiled: written here by the exr crate with tiles that
+    // do not divide the image (partial tiles at the right and bottom), in no particular order.
+    use exr::prelude::{Blocks, LineOrder, Vec2};
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("tiled.exr");
+    let (w, h) = (70, 45);
+    let wl = wavelengths();
+    let mut channels: Vec<(String, Vec<f32>)> = wl
+        .iter()
+        .enumerate()
+        .map(|(c, &l)| {
+            let v = (0..w * h).map(|i| value(i % w, i / w, c)).collect();
+            (spectral_channel_name(l), v)
+        })
+        .collect();
+    for (k, name) in ["R", "G", "B"].iter().enumerate() {
+        channels.push((
+            name.to_string(),
+            (0..w * h).map(|i| (i * 3 + k) as f32).collect(),
+        ));
+    }
+    let list: SmallVec<[AnyChannel<FlatSamples>; 4]> = channels
+        .into_iter()
+        .map(|(n, v)| AnyChannel::new(n.as_str(), FlatSamples::F32(v)))
+        .collect();
+    let encoding = Encoding {
+        compression: exr::compression::Compression::ZIP16,
+        blocks: Blocks::Tiles(Vec2(16, 16)),
+        line_order: LineOrder::Unspecified,
+    };
+    let mut attrs = LayerAttributes::default();
+    attrs.other.insert(
+        "spectralLayoutVersion".into(),
+        exr::meta::attribute::AttributeValue::Text("1.0".into()),
+    );
+    let layer = Layer::new((w, h), attrs, encoding, AnyChannels::sort(list));
+    Image::from_layer(layer).write().to_file(&path).unwrap();
+
+    let mut seen = vec![false; h];
+    let mut next = 0;
+    let info = read_spectral_rows(&path, |y, row| {
+        assert_eq!(y, next, "rows in order");
+        next += 1;
+        seen[y] = true;
+        let per_pixel = wl.len() + 3;
+        assert_eq!(row.len(), w * per_pixel);
+        for x in 0..w {
+            for c in 0..wl.len() {
+                assert_eq!(row[x * per_pixel + c], value(x, y, c), "({x},{y}) band {c}");
+            }
+            for k in 0..3 {
+                assert_eq!(
+                    row[x * per_pixel + wl.len() + k],
+                    ((y * w + x) * 3 + k) as f32
+                );
+            }
+        }
+    })
+    .unwrap();
+    assert!(seen.iter().all(|&s| s));
+    assert_eq!((info.width, info.height), (w, h));
+}

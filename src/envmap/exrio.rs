@@ -1270,9 +1270,10 @@ fn spectral_header(path: &Path) -> Result<SpectralHeader> {
 
 /// Streams a spectral OpenEXR (Fichet et al. 2021 emissive layout, first part) row by row:
 /// `f(y, values)` gets each row in increasing y, per pixel the bands sorted by wavelength and
-/// then R, G, B when present, multiplied by 2^EV when the header has `EV`. Blocks are
-/// decompressed on rayon's threads a few at a time (blocks that arrive early wait for their
-/// turn), so memory holds a few blocks, never the image.
+/// then R, G, B when present, multiplied by 2^EV when the header has `EV`. Scan-line and tiled
+/// files (the full-resolution level of a mip-mapped one) are read. Blocks are decompressed on
+/// rayon's threads a few at a time (blocks that arrive early wait for their turn), so memory
+/// holds a few blocks or a row of tiles, never the image.
 pub fn read_spectral_rows(path: &Path, mut f: impl FnMut(usize, &[f32])) -> Result<SpectralInfo> {
     let SpectralHeader {
         reader,
@@ -1292,34 +1293,40 @@ pub fn read_spectral_rows(path: &Path, mut f: impl FnMut(usize, &[f32])) -> Resu
         )
         .map_err(|e| exr_err(path, e))?;
     let mut decompressor = Decompressor::new(chunks);
-    let mut stash: BTreeMap<usize, UncompressedBlock> = BTreeMap::new();
+    // Blocks by the row they start at: a scan-line block is a whole band of rows; tiles of one
+    // band (a tile row) are gathered until they cover its width, then the band is emitted.
+    let mut stash: BTreeMap<usize, Vec<UncompressedBlock>> = BTreeMap::new();
     let mut next_y = 0usize;
     let mut line_buf = vec![0f32; width];
     let mut rows: Vec<f32> = Vec::new();
-    let mut emit = |block: UncompressedBlock, rows: &mut Vec<f32>| -> Result<usize> {
-        let (bw, bh) = (block.index.pixel_size.0, block.index.pixel_size.1);
-        let (bx, by) = (block.index.pixel_position.0, block.index.pixel_position.1);
-        if bx != 0 || bw != width {
-            return Err(parse_err(
-                path,
-                "tiled spectral images are not supported (scan lines only)",
-            ));
-        }
+    let mut band = |blocks: Vec<UncompressedBlock>, rows: &mut Vec<f32>| -> Result<usize> {
+        let by = blocks[0].index.pixel_position.1;
+        let bh = blocks[0].index.pixel_size.1;
         rows.clear();
         rows.resize(bh * width * per_pixel, 0.0);
-        for line in block.lines(&header.channels) {
-            let c = line.location.channel;
-            let Some(k) = slot[c] else { continue };
-            let n = line.location.sample_count;
-            let ly = line.location.position.1.wrapping_sub(by);
-            if ly >= bh || n != width {
-                return Err(parse_err(path, "corrupt OpenEXR file: bad line in block"));
+        for block in &blocks {
+            let (bx, bw) = (block.index.pixel_position.0, block.index.pixel_size.0);
+            if block.index.pixel_size.1 != bh || bx + bw > width {
+                return Err(parse_err(
+                    path,
+                    "corrupt OpenEXR file: tiles of a row differ",
+                ));
             }
-            let t = header.channels.list[c].sample_type;
-            line_to_f32(&line, t, &mut line_buf[..n]).map_err(|e| exr_err(path, e))?;
-            let row = &mut rows[ly * width * per_pixel..(ly + 1) * width * per_pixel];
-            for (x, v) in line_buf[..n].iter().enumerate() {
-                row[x * per_pixel + k] = v * scale;
+            for line in block.lines(&header.channels) {
+                let c = line.location.channel;
+                let Some(k) = slot[c] else { continue };
+                let n = line.location.sample_count;
+                let ly = line.location.position.1.wrapping_sub(by);
+                let lx = line.location.position.0.wrapping_sub(bx);
+                if ly >= bh || lx != 0 || n != bw {
+                    return Err(parse_err(path, "corrupt OpenEXR file: bad line in block"));
+                }
+                let t = header.channels.list[c].sample_type;
+                line_to_f32(&line, t, &mut line_buf[..n]).map_err(|e| exr_err(path, e))?;
+                let row = &mut rows[ly * width * per_pixel..(ly + 1) * width * per_pixel];
+                for (x, v) in line_buf[..n].iter().enumerate() {
+                    row[(bx + x) * per_pixel + k] = v * scale;
+                }
             }
         }
         for ly in 0..bh {
@@ -1330,11 +1337,21 @@ pub fn read_spectral_rows(path: &Path, mut f: impl FnMut(usize, &[f32])) -> Resu
         }
         Ok(by + bh)
     };
+    let covered = |blocks: &[UncompressedBlock]| -> usize {
+        blocks.iter().map(|b| b.index.pixel_size.0).sum()
+    };
     while let Some(block) = decompressor.next_block() {
         let block = block.map_err(|e| exr_err(path, e))?;
-        stash.insert(block.index.pixel_position.1, block);
-        while let Some(b) = stash.remove(&next_y) {
-            next_y = emit(b, &mut rows)?;
+        stash
+            .entry(block.index.pixel_position.1)
+            .or_default()
+            .push(block);
+        while stash
+            .get(&next_y)
+            .is_some_and(|blocks| covered(blocks) >= width)
+        {
+            let blocks = stash.remove(&next_y).expect("present");
+            next_y = band(blocks, &mut rows)?;
         }
     }
     if next_y != height {
