@@ -168,6 +168,58 @@ fn up_and_rotation_turn_the_map_and_its_sun() {
 }
 
 #[test]
+fn a_progress_bar_on_a_terminal_only() {
+    // util-linux's `script` gives the command a terminal (it is in every Debian install).
+    let Some(script) = which_script() else {
+        eprintln!("skipped: no `script` command to give the conversion a terminal");
+        return;
+    };
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("p.exr");
+    let run = |extra: &str| {
+        let cmd = format!(
+            "{} convert {} -o {} --range 400:700:20 {extra}",
+            env!("CARGO_BIN_EXE_specmap"),
+            sample("sunrise.exr"),
+            out.display()
+        );
+        let o = Command::new(&script)
+            .args(["-qec", &cmd, "/dev/null"])
+            .output()
+            .unwrap();
+        assert!(
+            o.status.success(),
+            "{cmd}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        String::from_utf8_lossy(&o.stdout).into_owned()
+    };
+    let shown = run("");
+    assert!(shown.contains("converting ["), "{shown}");
+    assert!(shown.contains("512/512 rows"), "{shown}");
+    assert!(
+        !shown.contains("0/0 rows"),
+        "drawn before the row count was known: {shown}"
+    );
+    assert!(!run("--quiet").contains("converting ["));
+    // Not a terminal: no bar (the tests above capture stderr through a pipe).
+    let piped = specmap(&[
+        "convert",
+        &sample("sunrise.exr"),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!String::from_utf8_lossy(&piped.stderr).contains("converting ["));
+}
+
+fn which_script() -> Option<std::path::PathBuf> {
+    ["/usr/bin/script", "/bin/script"]
+        .iter()
+        .map(std::path::PathBuf::from)
+        .find(|p| p.exists())
+}
+
+#[test]
 fn output_equal_to_input_is_refused() {
     let d = tempfile::tempdir().unwrap();
     let input = d.path().join("in.exr");

@@ -301,12 +301,15 @@ pub fn run(a: ConvertArgs) -> anyhow::Result<()> {
             .expect("a valid template")
             .progress_chars("=> "),
         );
-        b.set_message("converting");
         b
     });
     let progress = |done: usize, total: usize| {
         if let Some(b) = &bar {
-            b.set_length(total as u64);
+            // Drawn from the first report on, when the number of rows is known.
+            if b.length() != Some(total as u64) {
+                b.set_length(total as u64);
+                b.set_message("converting");
+            }
             b.set_position(done as u64);
         }
     };
