@@ -327,3 +327,40 @@ fn fit_writes_a_versioned_file_and_a_plot() {
     let out = specmap(&["fit", "--light", "D65,A", "-o", json.to_str().unwrap()]);
     assert!(!out.status.success());
 }
+
+#[test]
+fn cielab_against_a_white_with_a_zero_component_is_undefined_not_nan() {
+    // Low-pressure sodium has no power where the CIE 1964 z-bar is non-zero: the white's Z is 0
+    // and b* is 0/0. The command says so instead of printing NaN, and JSON has null plus a note.
+    let args = [
+        "color",
+        "colorchecker:red",
+        "--under",
+        "lps",
+        "--observer",
+        "cie1964",
+        "--range",
+        "380:780:5",
+    ];
+    let out = specmap(&args);
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(!text.contains("NaN"), "{text}");
+    assert!(
+        text.contains("undefined") && text.contains("Z = 0"),
+        "{text}"
+    );
+    let mut json_args = args.to_vec();
+    json_args.push("--json");
+    let doc: serde_json::Value = serde_json::from_slice(&specmap(&json_args).stdout).expect("JSON");
+    assert!(doc["XYZ"][2].as_f64().unwrap() == 0.0);
+    assert!(doc["lab"][2].is_null());
+    assert!(doc["lab_note"].as_str().unwrap().contains("Z = 0"));
+    // A white with every component is unaffected.
+    let doc: serde_json::Value = serde_json::from_slice(
+        &specmap(&["color", "colorchecker:red", "--under", "D65", "--json"]).stdout,
+    )
+    .unwrap();
+    assert!(doc["lab_note"].is_null());
+    assert!(doc["lab"][2].as_f64().unwrap() > 0.0);
+}

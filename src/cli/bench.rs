@@ -58,6 +58,17 @@ const LIGHTS: [&str; 6] = ["D65", "A", "FL2", "FL11", "LED-B3", "lps"];
 const RULES: [Rule; 3] = [Rule::Riemann, Rule::Trapezoid, Rule::Simpson];
 
 pub fn run(a: BenchArgs) -> anyhow::Result<()> {
+    // The report folder is checked before the minutes of measuring, not after.
+    if let Some(dir) = &a.report {
+        if dir.exists() && !dir.is_dir() {
+            anyhow::bail!(
+                "--report {}: that is a file, not a folder; give a folder for bench.md, \
+                 bench.json and the plots",
+                dir.display()
+            );
+        }
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
     let t0 = Instant::now();
     let quick = a.quick;
     let min_s = if quick { 0.005 } else { 0.05 };

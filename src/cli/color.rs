@@ -77,6 +77,21 @@ pub fn run(a: ColorArgs) -> anyhow::Result<()> {
     let linear_rgb = space.rgb_from_xyz(xyz);
     let code = srgb8(linear_srgb);
     let lab = Lab::from_xyz(xyz, white);
+    // CIELAB divides by the white: a light with no power under an observer's function (low-
+    // pressure sodium has none where the 1964 z-bar is non-zero) leaves that ratio 0/0.
+    let lab_undefined = ["X", "Y", "Z"]
+        .iter()
+        .zip(white.0)
+        .filter(|(_, w)| w.is_nan() || *w <= 0.0)
+        .map(|(n, _)| *n)
+        .collect::<Vec<_>>();
+    let lab_note = (!lab_undefined.is_empty()).then(|| {
+        format!(
+            "the light's white has {} = 0: it has no power where that colour-matching function \
+             is non-zero, so CIELAB, which divides by it, is undefined there",
+            lab_undefined.join(", ")
+        )
+    });
     let clipped = linear_srgb.iter().any(|&v| !(0.0..=1.0).contains(&v));
 
     if a.json {
@@ -96,6 +111,7 @@ pub fn run(a: ColorArgs) -> anyhow::Result<()> {
             "space": space.name,
             "linear_rgb": linear_rgb,
             "lab": lab.0,
+            "lab_note": lab_note,
             "grid_choice": choice,
             "lab_white": if under_label.is_some() { "the light (perfect reflector = L* 100)" } else { "D65, Y = 100" },
         });
@@ -147,13 +163,23 @@ pub fn run(a: ColorArgs) -> anyhow::Result<()> {
         );
     }
     super::write_srgb8(&mut out, code);
+    let lab_text = lab.0.map(|v| {
+        if v.is_finite() {
+            format!("{v:>10.4}")
+        } else {
+            format!("{:>10}", "undefined")
+        }
+    });
     outln!(
         out,
-        "  CIELAB       {:>10.4} {:>10.4} {:>10.4}",
-        lab.0[0],
-        lab.0[1],
-        lab.0[2]
+        "  CIELAB       {} {} {}",
+        lab_text[0],
+        lab_text[1],
+        lab_text[2]
     );
+    if let Some(note) = &lab_note {
+        outln!(out, "               {note}");
+    }
     super::emit(&out);
     Ok(())
 }

@@ -110,6 +110,9 @@ pub struct ConvertArgs {
     json: bool,
 }
 
+/// The largest `--size`: a lat-long height or a cube face (the renderer's limit too).
+const MAX_SIZE: usize = 16384;
+
 #[derive(Debug, Clone, Copy, ValueEnum)]
 enum UpArg {
     Y,
@@ -193,6 +196,21 @@ enum CompressionArg {
 }
 
 pub fn run(a: ConvertArgs) -> anyhow::Result<()> {
+    if !a.rotation.is_finite() {
+        anyhow::bail!(
+            "--rotation {}: the angle must be a finite number of degrees",
+            a.rotation
+        );
+    }
+    if let Some(n) = a.size {
+        if n > MAX_SIZE {
+            anyhow::bail!(
+                "--size {n}: at most {MAX_SIZE} (a {0}x{MAX_SIZE} lat-long or {MAX_SIZE}-pixel cube \
+                 faces already hold billions of values)",
+                2 * MAX_SIZE
+            );
+        }
+    }
     if let Some(dir) = a.output.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir)
             .with_context(|| format!("creating the output folder {}", dir.display()))?;

@@ -84,8 +84,11 @@ pub fn run(a: FitArgs) -> anyhow::Result<()> {
     let pixel = match &a.rgb {
         Some(v) => {
             let rgb = [v[0], v[1], v[2]];
-            if rgb.iter().any(|x| !x.is_finite() || *x < 0.0) {
-                anyhow::bail!("--rgb {rgb:?}: linear RGB values must be finite and non-negative");
+            if rgb.iter().any(|x| !x.is_finite() || *x < 0.0 || *x > 1e30) {
+                anyhow::bail!(
+                    "--rgb {rgb:?}: linear RGB values must be between 0 and 1e30 (HDR is fine; \
+                     beyond that the coefficients overflow)"
+                );
             }
             let up = fit::Upsampler::new(&f, &space);
             let coefficients = up.coefficients(rgb);

@@ -187,6 +187,15 @@ fn diffuse(spec: &str) -> anyhow::Result<Tabulated> {
 }
 
 pub fn run(a: RenderArgs) -> anyhow::Result<()> {
+    if !(a.exposure.is_finite() && a.exposure.abs() <= 64.0) {
+        anyhow::bail!(
+            "--exposure {}: stops must be between -64 and 64",
+            a.exposure
+        );
+    }
+    if a.repeats == 0 {
+        anyhow::bail!("--repeats 0: the sweep needs at least one frame per wavelength count");
+    }
     let preset = Preset::from(a.scene);
     let (w, h) = match &a.size {
         Some(s) => size(s)?,

@@ -27,6 +27,12 @@ pub struct RoundtripArgs {
 }
 
 pub fn run(a: RoundtripArgs) -> anyhow::Result<()> {
+    if !(a.heatmap_max.is_finite() && a.heatmap_max > 0.0) {
+        anyhow::bail!(
+            "--heatmap-max {}: the CIEDE2000 shown as white must be positive",
+            a.heatmap_max
+        );
+    }
     let mut de = Vec::new();
     let r = round_trip_file(
         &a.file,
@@ -69,6 +75,13 @@ pub fn run(a: RoundtripArgs) -> anyhow::Result<()> {
         );
     }
     outln!(out, "  sun pixels       {}", r.sun_pixels);
+    if r.non_finite_pixels > 0 {
+        outln!(
+            out,
+            "  left out         {} pixels with NaN or infinite values",
+            r.non_finite_pixels
+        );
+    }
     super::emit(&out);
     Ok(())
 }

@@ -372,6 +372,31 @@ pub fn convert(
             output.display()
         )));
     }
+    // Settings that need no input are checked before the work starts.
+    if let Some(SunSpd::Light(name)) = &opts.sun_spd {
+        let s = data::spectrum(name)?;
+        let (lo, hi) = s
+            .data
+            .values()
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
+                (lo.min(v), hi.max(v))
+            });
+        if !(lo >= 0.0 && hi > 0.0 && hi.is_finite()) {
+            return Err(Error::invalid(format!(
+                "--sun-spd {name}: a sun's SPD must be finite, non-negative and not all zero \
+                 (values from {lo} to {hi})"
+            )));
+        }
+    }
+    if opts.format == OutputFormat::Spectral && opts.grid.len() > MAX_BANDS {
+        return Err(Error::invalid(format!(
+            "{} wavelengths would make {} channels per pixel; a spectral EXR here holds at most \
+             {MAX_BANDS} bands (0.1 nm over 400 nm): choose a coarser --range step",
+            opts.grid.len(),
+            opts.grid.len() + 4
+        )));
+    }
     let t0 = Instant::now();
     let (mut map, description) = read_input(input, opts)?;
     let (mut sanitized, out_of_gamut) = sanitize(&mut map, opts.strict, input, &opts.space)?;
@@ -885,6 +910,10 @@ impl Accumulator {
         }
     }
 }
+
+/// The most wavelength bands a spectral output holds (0.1 nm over 400 nm): each is a channel of
+/// every pixel, and the rows of a batch are held in memory.
+pub const MAX_BANDS: usize = 4001;
 
 /// The default output path for an input: `NAME.spectral.exr` beside it.
 pub fn default_output(input: &str) -> PathBuf {

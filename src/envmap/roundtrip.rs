@@ -37,6 +37,9 @@ pub struct FileRoundTrip {
     /// Pixels not marked in the `sun` channel (all pixels when the file has none).
     pub without_sun: Stats,
     pub sun_pixels: usize,
+    /// Pixels left out because a band or an R, G, B value is NaN or infinite (or their
+    /// integral overflows).
+    pub non_finite_pixels: usize,
 }
 
 #[derive(Default)]
@@ -197,6 +200,7 @@ pub fn round_trip_file(
     let bands = wavelengths.len();
     let (mut all, mut no_sun) = (Acc::default(), Acc::default());
     let mut sun_pixels = 0;
+    let mut non_finite_pixels = 0;
     let mut missing_rgb = false;
     if let Some(h) = heatmap.as_deref_mut() {
         h.clear();
@@ -225,6 +229,10 @@ pub fn round_trip_file(
                 }
             }
             let input = [p[bands] as f64, p[bands + 1] as f64, p[bands + 2] as f64];
+            if !(back.iter().chain(&input).all(|v| v.is_finite())) {
+                non_finite_pixels += 1;
+                continue;
+            }
             let lum = y_row[0] * input[0] + y_row[1] * input[1] + y_row[2] * input[2];
             if lum.is_nan() || lum <= 0.0 {
                 continue;
@@ -265,6 +273,7 @@ pub fn round_trip_file(
         all: all.finish(),
         without_sun: no_sun.finish(),
         sun_pixels,
+        non_finite_pixels,
     })
 }
 

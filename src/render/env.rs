@@ -281,14 +281,32 @@ fn lighting(light: &str, basis: [&str; 3], env: CoeffMap, sun: Option<Sun>) -> R
     })
 }
 
-fn sanitize(img: &mut RgbImage) {
-    for p in img.pixels.iter_mut() {
+/// NaN, infinite and negative values become 0 (as `convert` does). Values beyond
+/// [`MAX_RADIANCE`] are an error naming the first one: f32 spectral arithmetic would overflow.
+fn sanitize(path: &Path, img: &mut RgbImage) -> Result<()> {
+    let w = img.width.max(1);
+    for (i, p) in img.pixels.iter_mut().enumerate() {
         for v in p.iter_mut() {
             if !v.is_finite() || *v < 0.0 {
                 *v = 0.0;
+            } else if *v as f64 > MAX_RADIANCE {
+                return Err(too_bright(path, i % w, i / w, *v as f64));
             }
         }
     }
+    Ok(())
+}
+
+/// The largest radiance an environment may hold: far above any photograph (the sun is about
+/// 1e9 cd/m^2), far below where f32 products of spectra and filters overflow (3.4e38).
+pub const MAX_RADIANCE: f64 = 1e18;
+
+fn too_bright(path: &Path, x: usize, y: usize, v: f64) -> Error {
+    Error::invalid(format!(
+        "{}: pixel ({x}, {y}) value {v:e} exceeds {MAX_RADIANCE:e}, beyond what the renderer's \
+         f32 arithmetic carries; scale the map down (e.g. convert it with an exposure)",
+        path.display()
+    ))
 }
 
 /// Sum of `s * omega` and the energy-weighted mean direction of the pixels `s` (a value per
@@ -344,7 +362,7 @@ fn read_map(path: &Path) -> Result<(EnvMap, [usize; 2])> {
     let layout = detect(img.image.width, img.image.height, attr)
         .map_err(|e| Error::invalid(format!("{}: {e}", path.display())))?;
     let mut image = img.image;
-    sanitize(&mut image);
+    sanitize(path, &mut image)?;
     let map = EnvMap::new(layout, image)
         .map_err(|e| Error::invalid(format!("{}: {e}", path.display())))?;
     Ok((map, size))
@@ -473,6 +491,12 @@ fn load_basis(path: &Path) -> Result<(Lighting, EnvReport)> {
         if !c_img.pixels[i].iter().all(|v| v.is_finite()) {
             c_img.pixels[i] = [0.0; 3];
         }
+        let peak = c_img.pixels[i]
+            .iter()
+            .fold(s[i], |m, &v| m.max((v as f64).abs()));
+        if peak > MAX_RADIANCE {
+            return Err(too_bright(path, i % w, i / w, peak));
+        }
     }
     let map = EnvMap::new(layout, c_img)
         .map_err(|e| Error::invalid(format!("{}: {e}", path.display())))?;
@@ -563,10 +587,21 @@ fn load_spectral(path: &Path, light: &str) -> Result<(Lighting, EnvReport)> {
     let y_norm: f64 = bar[1].iter().sum();
     let mut luminance = vec![0.0; w * h];
     let mut worst = 0.0f64;
+    let mut too_large: Option<(usize, usize, f64)> = None;
     exrio::read_spectral_rows(path, |y, row| {
         let per = row.len() / w;
         for x in 0..w {
             let px = &row[x * per..x * per + n];
+            // A pixel with a NaN or infinite band is black (as `convert` treats them); one
+            // beyond MAX_RADIANCE stops the load.
+            if !px.iter().all(|v| v.is_finite()) {
+                continue;
+            }
+            let peak = px.iter().fold(0f64, |m, &v| m.max((v as f64).abs()));
+            if peak > MAX_RADIANCE {
+                too_large.get_or_insert((x, y, peak));
+                continue;
+            }
             // How far the spectrum is from the basis' span (reported, not used).
             let b = nalgebra::Vector4::from_fn(|a, _| {
                 (0..n).map(|i| spectra[a][i] * px[i] as f64).sum::<f64>()
@@ -592,6 +627,9 @@ fn load_spectral(path: &Path, light: &str) -> Result<(Lighting, EnvReport)> {
             luminance[i] = xyz[1] / y_norm;
         }
     })?;
+    if let Some((x, y, v)) = too_large {
+        return Err(too_bright(path, x, y, v));
+    }
     let layout = detect(
         w,
         h,
@@ -603,7 +641,7 @@ fn load_spectral(path: &Path, light: &str) -> Result<(Lighting, EnvReport)> {
     .map_err(|e| Error::invalid(format!("{}: {e}", path.display())))?;
     let bad = |e: Error| Error::invalid(format!("{}: {e}", path.display()));
     let mut preview = EnvMap::new(layout, preview).map_err(bad)?;
-    sanitize(&mut preview.image);
+    sanitize(path, &mut preview.image)?;
     // The sun: its pixels leave the environment and become the directional light, with the
     // mean of their own spectra as its SPD (a matched sun is not D65).
     let mut s = vec![0.0; w * h];

@@ -374,8 +374,12 @@ impl Scene {
                 )));
             }
             for (name, v) in [("kd", s.kd), ("ks", s.ks)] {
-                if !(v.is_finite() && v >= 0.0) {
-                    return Err(Error::invalid(format!("{what}: {name} {v} must be >= 0")));
+                // Phong's factors are reflectances: 1 is a perfect reflector; 100 leaves room
+                // for a brighter preview without overflowing f32 radiance.
+                if !(v.is_finite() && (0.0..=100.0).contains(&v)) {
+                    return Err(Error::invalid(format!(
+                        "{what}: {name} {v} must be between 0 and 100 (1 reflects all light)"
+                    )));
                 }
             }
             if s.transparent && s.film.is_none() {
