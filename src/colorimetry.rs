@@ -49,10 +49,20 @@ pub struct Cmfs {
 
 impl Cmfs {
     /// The observer's built-in CMFs on `grid` (CIE 167 resampling; the tables are at 1 nm).
+    /// Outside the tables' range (360-830 nm) the observer sees nothing: the functions are 0
+    /// there, not their end values held (colour-science integrates over the CMFs' own domain).
     pub fn new(observer: Observer, grid: &WavelengthGrid) -> Result<Cmfs> {
         let t = Table::builtin(observer.table_name())?;
         let col = |c: &str| -> Result<Spectrum> {
-            Ok(t.column(c)?.resample(grid, Interpolation::Cie167))
+            let data = t.column(c)?;
+            let (lo, hi) = data.range_nm();
+            let s = data.resample(grid, Interpolation::Cie167);
+            let values = grid
+                .wavelengths_nm()
+                .zip(s.values())
+                .map(|(l, &v)| if (lo..=hi).contains(&l) { v } else { 0.0 })
+                .collect();
+            Spectrum::new(*grid, values)
         };
         Ok(Cmfs {
             observer,
@@ -573,5 +583,31 @@ mod tests {
         assert!(d65.duv > 0.0);
         // A saturated red is far from the locus.
         assert!(cct(Xyz::new(40.0, 20.0, 2.0)).unwrap().kelvin.is_none());
+    }
+
+    #[test]
+    fn the_observer_sees_nothing_outside_its_tables() {
+        // Beyond 360-830 nm the CMFs are 0, not their end values held: widening the range adds
+        // nothing, and a range wholly outside has no visible energy (a clear error).
+        let wide = Cmfs::new(Observer::Cie1931, &"300:900:5".parse().unwrap()).unwrap();
+        for (l, v) in wide.grid().wavelengths_nm().zip(wide.x.values()) {
+            if !(360.0..=830.0).contains(&l) {
+                assert_eq!(*v, 0.0, "{l} nm");
+            }
+        }
+        let d65 = crate::data::spectrum("D65").unwrap().data;
+        let xyz = |g: &str| {
+            let grid: WavelengthGrid = g.parse().unwrap();
+            let c = Cmfs::new(Observer::Cie1931, &grid).unwrap();
+            let s = d65.resample(&grid, Interpolation::Linear);
+            c.integrate(&s, Rule::Riemann).unwrap()
+        };
+        let (a, b) = (xyz("300:900:5"), xyz("360:830:5"));
+        for k in 0..3 {
+            assert!((a[k] - b[k]).abs() <= 1e-12 * b[k].abs(), "{a:?} vs {b:?}");
+        }
+        let uv = Cmfs::new(Observer::Cie1931, &"100:200:10".parse().unwrap()).unwrap();
+        let s = d65.resample(uv.grid(), Interpolation::Linear);
+        assert!(uv.k(&s, Rule::Riemann).is_err());
     }
 }
