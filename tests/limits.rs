@@ -238,3 +238,35 @@ fn a_bench_report_that_is_a_file_is_refused_before_measuring() {
     assert!(!err.contains("bench: grid"), "{err}");
     assert_eq!(std::fs::read_to_string(&file).unwrap(), "mine");
 }
+
+#[test]
+fn a_map_with_absurd_values_is_refused_naming_the_pixel() {
+    // 3e38 is a finite f32 but no radiance: the message names the input pixel, not the output.
+    let d = tempfile::tempdir().unwrap();
+    let src = d.path().join("in.exr");
+    exr::prelude::write_rgb_file(&src, 8, 4, |x, y| {
+        if (x, y) == (3, 1) {
+            (1.0f32, -3e38f32, 1.0f32)
+        } else {
+            (0.5f32, 0.5, 0.5)
+        }
+    })
+    .unwrap();
+    let out_dir = d.path().join("out");
+    std::fs::create_dir(&out_dir).unwrap();
+    let out = out_dir.join("x.exr");
+    for precision in ["half", "float"] {
+        refused(
+            &out_dir,
+            &[
+                "convert",
+                src.to_str().unwrap(),
+                "-o",
+                out.to_str().unwrap(),
+                "--precision",
+                precision,
+            ],
+            &["pixel (3, 1) channel G", "in.exr"],
+        );
+    }
+}

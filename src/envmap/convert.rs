@@ -342,6 +342,15 @@ fn sanitize(
                 }
                 *v = 0.0;
                 s.non_finite += 1;
+            } else if (*v as f64).abs() > MAX_INPUT {
+                return Err(Error::invalid(format!(
+                    "{input}: pixel ({}, {}) channel {} is {v:e}, beyond {MAX_INPUT:e}: no \
+                     radiance map holds that (the sun is about 1e9 cd/m^2); a corrupt or \
+                     mis-scaled file? Scale it down first",
+                    i % width,
+                    i / width,
+                    ["R", "G", "B"][c]
+                )));
             } else if *v < 0.0 {
                 *v = 0.0;
                 s.negative += 1;
@@ -910,6 +919,10 @@ impl Accumulator {
         }
     }
 }
+
+/// The largest input value converted: far above any photograph, far below where spectra
+/// (value x basis, in f32) or the half-float EV scale (at most 2^100) overflow.
+pub const MAX_INPUT: f64 = 1e18;
 
 /// The most wavelength bands a spectral output holds (0.1 nm over 400 nm): each is a channel of
 /// every pixel, and the rows of a batch are held in memory.
