@@ -8,7 +8,7 @@ pub mod layout;
 pub mod light;
 pub mod roundtrip;
 pub mod sun;
-mod zip;
+pub mod zip;
 
 /// A linear RGB image in memory, row-major from the top-left pixel, f32 per channel.
 #[derive(Debug, Clone, PartialEq)]
