@@ -54,10 +54,26 @@ struct Row {
     note: String,
 }
 
+/// What `--report DIR` writes.
+const REPORT_FILES: [&str; 5] = [
+    "bench.md",
+    "bench.json",
+    "grid.png",
+    "film.png",
+    "render.png",
+];
+
 const LIGHTS: [&str; 6] = ["D65", "A", "FL2", "FL11", "LED-B3", "lps"];
 const RULES: [Rule; 3] = [Rule::Riemann, Rule::Trapezoid, Rule::Simpson];
 
 pub fn run(a: BenchArgs) -> anyhow::Result<()> {
+    if let Some(dir) = &a.report {
+        let mut guard = super::guard::Guard::new();
+        for name in REPORT_FILES {
+            guard.output("--report", dir.join(name));
+        }
+        guard.check()?;
+    }
     let t0 = Instant::now();
     let quick = a.quick;
     let min_s = if quick { 0.005 } else { 0.05 };

@@ -27,6 +27,12 @@ pub struct RoundtripArgs {
 }
 
 pub fn run(a: RoundtripArgs) -> anyhow::Result<()> {
+    let mut guard = super::guard::Guard::new();
+    guard.input("", &a.file);
+    if let Some(p) = &a.heatmap {
+        guard.output("--heatmap", p);
+    }
+    guard.check()?;
     let mut de = Vec::new();
     let r = round_trip_file(
         &a.file,
