@@ -1,6 +1,6 @@
 //! Nothing the user had is lost, through the binary: an output that is one of the command's
 //! inputs is refused before any work, naming both; an output that is not a regular file is never
-//! replaced.
+//! replaced; each error cause is printed once.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -368,4 +368,35 @@ fn an_unwritable_folder_is_named_by_the_users_path() {
         );
         assert_eq!(err.lines().count(), 1, "{err}");
     }
+}
+
+#[test]
+fn a_missing_input_is_reported_once() {
+    let d = tempfile::tempdir().unwrap();
+    let nope = d.path().join("nope.csv");
+    let nope_exr = d.path().join("nope.exr");
+    let out = d.path().join("out.exr");
+    for args in [
+        &["data", "show", s(&nope)][..],
+        &["color", s(&nope)],
+        &["convert", s(&nope_exr), "-o", s(&out)],
+        &[
+            "render",
+            "--backend",
+            "cpu",
+            "--size",
+            "8x8",
+            "--env",
+            s(&nope_exr),
+            "-o",
+            s(&out),
+        ],
+        &["rendition", s(&nope_exr), s(&nope_exr)],
+        &["roundtrip", s(&nope_exr)],
+    ] {
+        let err = fails(args);
+        assert!(err.contains("nope."), "{args:?}: {err}");
+        assert_eq!(err.matches("os error 2").count(), 1, "{args:?}: {err}");
+    }
+    assert!(listing(d.path()).is_empty());
 }
