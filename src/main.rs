@@ -7,6 +7,7 @@ use std::process::ExitCode;
 
 fn main() -> ExitCode {
     let args = cli::Cli::parse();
+    remove_temp_files_on_signals();
     match cli::run(args) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
@@ -35,6 +36,37 @@ fn error_text(e: &anyhow::Error) -> String {
     }
     out
 }
+
+/// On SIGINT, SIGTERM or SIGHUP: remove the temporary files of the outputs being written (so an
+/// interrupted run leaves nothing behind; finished outputs stay) and exit with 128 + the signal,
+/// as a shell reports a process killed by it.
+#[cfg(unix)]
+fn remove_temp_files_on_signals() {
+    use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+    let mut signals = match signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP]) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("warning: cannot handle interrupts ({e}); an interrupted run may leave temporary files");
+            return;
+        }
+    };
+    let spawned = std::thread::Builder::new()
+        .name("specmap signals".into())
+        .spawn(move || {
+            if let Some(signal) = signals.forever().next() {
+                specmap::io::remove_temp_files();
+                std::process::exit(128 + signal);
+            }
+        });
+    if let Err(e) = spawned {
+        eprintln!(
+            "warning: cannot handle interrupts ({e}); an interrupted run may leave temporary files"
+        );
+    }
+}
+
+#[cfg(not(unix))]
+fn remove_temp_files_on_signals() {}
 
 #[cfg(test)]
 mod tests {

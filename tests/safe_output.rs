@@ -1,6 +1,6 @@
 //! Nothing the user had is lost, through the binary: an output that is one of the command's
 //! inputs is refused before any work, naming both; an output that is not a regular file is never
-//! replaced; each error cause is printed once.
+//! replaced; an interrupted run leaves no temporary file; each error cause is printed once.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -399,4 +399,56 @@ fn a_missing_input_is_reported_once() {
         assert_eq!(err.matches("os error 2").count(), 1, "{args:?}: {err}");
     }
     assert!(listing(d.path()).is_empty());
+}
+
+/// Starts a slow conversion into an empty folder, waits for its temporary file, sends `signal`,
+/// and checks the exit status and that the folder is empty again.
+#[cfg(unix)]
+fn interrupted(signal: &str, code: i32) {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("k.exr");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_specmap"))
+        .args(["convert", &repo("envmaps/forest.exr"), "-o", s(&out)])
+        .args(["--range", "380:780:1", "--compression", "zip"])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // The writer's temporary file, once it holds data (not the empty probe made up front).
+    let writing = || {
+        listing(d.path()).iter().any(|n| {
+            n.ends_with(".tmp.exr")
+                && std::fs::metadata(d.path().join(n)).is_ok_and(|m| m.len() > 0)
+        })
+    };
+    let t0 = std::time::Instant::now();
+    while !writing() {
+        assert!(
+            t0.elapsed().as_secs() < 20,
+            "no temporary file appeared in 20 s"
+        );
+        assert!(child.try_wait().unwrap().is_none(), "convert ended early");
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+    let sent = Command::new("kill")
+        .args([signal, &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(sent.success());
+    let status = child.wait().unwrap();
+    assert!(!status.success());
+    assert_eq!(status.code(), Some(code), "{status:?}");
+    assert!(listing(d.path()).is_empty(), "{:?}", listing(d.path()));
+}
+
+#[cfg(unix)]
+#[test]
+fn sigint_removes_the_temporary_file_and_exits_130() {
+    interrupted("-INT", 130);
+}
+
+#[cfg(unix)]
+#[test]
+fn sigterm_removes_the_temporary_file_and_exits_143() {
+    interrupted("-TERM", 143);
 }
