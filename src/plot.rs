@@ -34,18 +34,42 @@ fn register_font() {
     });
 }
 
-/// Writes the figure to `path` (.png or .svg) through a temporary file renamed into place.
+/// Writes the figure to `path` (.png or .svg) through a temporary file renamed into place. The
+/// figure is drawn in memory, so a file that cannot be written is reported by the operating
+/// system's reason, naming `path`.
 pub fn write(figure: &Figure, path: &Path) -> Result<()> {
     register_font();
     let ext = path
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default();
-    let tmp = crate::io::temp_path_for(path)?;
-    let size = (960, 600);
-    let drawn = match ext.as_str() {
-        "png" => draw(figure, BitMapBackend::new(&tmp, size).into_drawing_area()),
-        "svg" => draw(figure, SVGBackend::new(&tmp, size).into_drawing_area()),
+    let (w, h) = (960u32, 600u32);
+    let drawn =
+        |e: String| Error::invalid(format!("{}: cannot draw the plot: {e}", path.display()));
+    let bytes = match ext.as_str() {
+        "png" => {
+            let mut rgb = vec![0u8; w as usize * h as usize * 3];
+            draw(
+                figure,
+                BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area(),
+            )
+            .map_err(drawn)?;
+            let img = image::RgbImage::from_raw(w, h, rgb)
+                .ok_or_else(|| drawn("the image buffer does not match its size".into()))?;
+            let mut png = Vec::new();
+            img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+                .map_err(|e| drawn(e.to_string()))?;
+            png
+        }
+        "svg" => {
+            let mut svg = String::new();
+            draw(
+                figure,
+                SVGBackend::with_string(&mut svg, (w, h)).into_drawing_area(),
+            )
+            .map_err(drawn)?;
+            svg.into_bytes()
+        }
         _ => {
             return Err(Error::invalid(format!(
                 "{}: plots are written as .png or .svg",
@@ -53,16 +77,7 @@ pub fn write(figure: &Figure, path: &Path) -> Result<()> {
             )))
         }
     };
-    match drawn {
-        Ok(()) => crate::io::rename_into_place(&tmp, path),
-        Err(e) => {
-            let _ = std::fs::remove_file(&tmp);
-            Err(Error::invalid(format!(
-                "{}: cannot draw the plot: {e}",
-                path.display()
-            )))
-        }
-    }
+    crate::io::write_atomic(path, &bytes)
 }
 
 fn draw<DB: DrawingBackend>(

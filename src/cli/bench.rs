@@ -54,6 +54,15 @@ struct Row {
     note: String,
 }
 
+/// What `--report DIR` writes.
+const REPORT_FILES: [&str; 5] = [
+    "bench.md",
+    "bench.json",
+    "grid.png",
+    "film.png",
+    "render.png",
+];
+
 const LIGHTS: [&str; 6] = ["D65", "A", "FL2", "FL11", "LED-B3", "lps"];
 const RULES: [Rule; 3] = [Rule::Riemann, Rule::Trapezoid, Rule::Simpson];
 
@@ -68,6 +77,13 @@ pub fn run(a: BenchArgs) -> anyhow::Result<()> {
             );
         }
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    if let Some(dir) = &a.report {
+        let mut guard = super::guard::Guard::new();
+        for name in REPORT_FILES {
+            guard.output("--report", dir.join(name));
+        }
+        guard.check()?;
     }
     let t0 = Instant::now();
     let quick = a.quick;

@@ -211,10 +211,6 @@ pub fn run(a: ConvertArgs) -> anyhow::Result<()> {
             );
         }
     }
-    if let Some(dir) = a.output.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir)
-            .with_context(|| format!("creating the output folder {}", dir.display()))?;
-    }
     let fit = match &a.fit {
         Some(p) => Some(Fit::load(p)?),
         None => None,
@@ -310,6 +306,18 @@ pub fn run(a: ConvertArgs) -> anyhow::Result<()> {
         tolerance: a.tolerance,
         ..ConvertOptions::default()
     };
+    let mut guard = super::guard::Guard::new();
+    for file in convert::input_files(&a.input, &opts) {
+        guard.input("", file);
+    }
+    if let Some(p) = &a.fit {
+        guard.input("--fit", p);
+    }
+    guard.output("-o", &a.output).check()?;
+    if let Some(dir) = a.output.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("creating the output folder {}", dir.display()))?;
+    }
     let bar = (!a.quiet && std::io::stderr().is_terminal()).then(|| {
         let b = indicatif::ProgressBar::new(0);
         b.set_style(

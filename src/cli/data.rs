@@ -138,6 +138,12 @@ fn list(json: bool) -> anyhow::Result<()> {
 }
 
 fn show(a: ShowArgs) -> anyhow::Result<()> {
+    if let Some(p) = &a.plot {
+        super::guard::Guard::new()
+            .spec("", &a.name)
+            .output("--plot", p)
+            .check()?;
+    }
     // NAME is a whole table, or TABLE:COLUMN for one column.
     let (table, only) = match Table::load(&a.name) {
         Ok(t) => (t, None),

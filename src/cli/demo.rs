@@ -192,6 +192,25 @@ pub fn run(a: DemoArgs) -> anyhow::Result<()> {
     }
     let sizes = Sizes::new(a.quick);
     let out = |name: &str| dir.join(name);
+    let stem = file_stem(&env_path);
+    let spectral_name = format!("{stem}.spectral.exr");
+    let paper_name = format!("{stem}-paper.spectral.exr");
+    // Every file the demo writes, checked against the map before any work.
+    let mut guard = super::guard::Guard::new();
+    guard.input("--env", &env_path);
+    let mut names = vec![
+        "basis.png".to_string(),
+        spectral_name.clone(),
+        "roundtrip.png".into(),
+        paper_name.clone(),
+        "roundtrip-paper.png".into(),
+    ];
+    names.extend(Preset::ALL.map(|p| format!("{}.png", p.name())));
+    names.push("index.html".into());
+    for name in &names {
+        guard.output("-o", out(name));
+    }
+    guard.check()?;
     let shown = |name: &str| sh(&out(name).display().to_string());
     let mut seconds = Vec::new();
 
@@ -250,8 +269,6 @@ pub fn run(a: DemoArgs) -> anyhow::Result<()> {
     seconds.push(("fit", t.elapsed().as_secs_f64()));
 
     // 2. The map, converted as `specmap convert --light auto` does, and a small paper-mode copy.
-    let stem = file_stem(&env_path);
-    let spectral_name = format!("{stem}.spectral.exr");
     eprintln!(
         "demo [2/5] convert: {} -> {} (--light auto), and a paper-mode copy",
         env_path.display(),
@@ -269,7 +286,7 @@ pub fn run(a: DemoArgs) -> anyhow::Result<()> {
     let paper = convert_map(
         &env_str,
         &dir,
-        &format!("{stem}-paper.spectral.exr"),
+        &paper_name,
         "roundtrip-paper.png",
         Mode::Paper,
         Some(sizes.paper_map),

@@ -55,6 +55,20 @@ pub fn run(a: FitArgs) -> anyhow::Result<()> {
     if a.rgb.as_ref().is_some_and(|v| v.len() != 3) {
         anyhow::bail!("--rgb takes three comma-separated values, e.g. --rgb 1,0.5,0.2");
     }
+    let mut guard = super::guard::Guard::new();
+    for light in &a.light {
+        guard.spec("--light", light);
+    }
+    for b in &a.basis {
+        guard.spec("--basis", b);
+    }
+    if let Some(p) = &a.output {
+        guard.output("-o", p);
+    }
+    if let Some(p) = &a.plot {
+        guard.output("--plot", p);
+    }
+    guard.check()?;
     let space = RgbSpace::from(a.space);
     let modes: Vec<Mode> = a.mode.iter().map(|&m| Mode::from(m)).collect();
     let mut fits = Vec::new();

@@ -6,6 +6,7 @@ mod convert;
 mod data;
 mod demo;
 mod fit;
+mod guard;
 mod render;
 mod rendition;
 mod roundtrip;

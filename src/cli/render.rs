@@ -204,6 +204,30 @@ pub fn run(a: RenderArgs) -> anyhow::Result<()> {
     if preset == Preset::Chart && (a.env.is_some() || a.light != "D65") {
         anyhow::bail!("the chart compares D65, A and low-pressure sodium side by side; --env and --light do not apply to it");
     }
+    let output = a
+        .output
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(format!("render-{}.png", preset.name())));
+    let mut guard = super::guard::Guard::new();
+    if let Some(p) = &a.env {
+        guard.input("--env", p);
+    }
+    guard.spec("--light", &a.light);
+    if let Some(d) = &a.diffuse {
+        guard.spec("--diffuse", d);
+    }
+    match (&a.sweep, &a.sweep_out) {
+        (Some(_), Some(dir)) => {
+            for name in ["sweep.md", "sweep.json", "sweep.png"] {
+                guard.output("--sweep-out", dir.join(name));
+            }
+        }
+        (Some(_), None) => {}
+        (None, _) => {
+            guard.output("-o", &output);
+        }
+    }
+    guard.check()?;
     let (lighting, env_report) = match &a.env {
         Some(p) => {
             let (l, r) = env::load(p, &a.light)
@@ -361,10 +385,6 @@ pub fn run(a: RenderArgs) -> anyhow::Result<()> {
         None => (cpu::render(&prepared), None),
     };
     let render_s = t1.elapsed().as_secs_f64();
-    let output = a
-        .output
-        .clone()
-        .unwrap_or_else(|| PathBuf::from(format!("render-{}.png", preset.name())));
     image
         .write(&output, a.exposure)
         .with_context(|| format!("writing {}", output.display()))?;

@@ -33,6 +33,12 @@ pub fn run(a: RoundtripArgs) -> anyhow::Result<()> {
             a.heatmap_max
         );
     }
+    let mut guard = super::guard::Guard::new();
+    guard.input("", &a.file);
+    if let Some(p) = &a.heatmap {
+        guard.output("--heatmap", p);
+    }
+    guard.check()?;
     let mut de = Vec::new();
     let r = round_trip_file(
         &a.file,

@@ -157,6 +157,15 @@ fn layers(spec: &str) -> anyhow::Result<Vec<Layer>> {
 }
 
 pub fn run(a: ThinfilmArgs) -> anyhow::Result<()> {
+    if let Some(p) = &a.plot {
+        super::guard::Guard::new()
+            .spec_list("--layers", &a.layers)
+            .spec("--substrate", &a.substrate)
+            .spec("--ambient", &a.ambient)
+            .spec("--under", &a.under)
+            .output("--plot", p)
+            .check()?;
+    }
     let layer_list = layers(&a.layers)?;
     let substrate = material(&a.substrate).map_err(|e| anyhow::anyhow!("substrate: {e}"))?;
     let ambient = material(&a.ambient).map_err(|e| anyhow::anyhow!("ambient: {e}"))?;

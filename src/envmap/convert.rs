@@ -360,11 +360,32 @@ fn sanitize(
     Ok((s, out_of_gamut))
 }
 
-fn same_file(a: &Path, b: &Path) -> bool {
-    match (a.canonicalize(), b.canonicalize()) {
-        (Ok(x), Ok(y)) => x == y,
-        _ => a == b,
+/// The files a conversion reads: the map (or its six face files, in both spellings of the
+/// `{face}` pattern) and the lights given as CSV files (`--light`, `--sun-spd`), that exist.
+pub fn input_files(input: &str, opts: &ConvertOptions) -> Vec<PathBuf> {
+    let mut files = Vec::new();
+    if opts.faces || input.contains("{face}") {
+        for (name, signed) in exrio::FACE_NAMES.iter().zip(exrio::FACE_SIGNED) {
+            files.push(PathBuf::from(input.replace("{face}", name)));
+            files.push(PathBuf::from(input.replace("{face}", signed)));
+        }
+    } else {
+        files.push(PathBuf::from(input));
     }
+    let mut spec = |s: &str| {
+        files.push(PathBuf::from(s));
+        if let Some((table, _)) = s.rsplit_once(':') {
+            files.push(PathBuf::from(table));
+        }
+    };
+    if let LightSpec::Named(n) = &opts.light {
+        spec(n);
+    }
+    if let Some(SunSpd::Light(n)) = &opts.sun_spd {
+        spec(n);
+    }
+    files.retain(|f| f.is_file());
+    files
 }
 
 /// Converts `input` to a spectral (or basis) OpenEXR at `output`. `progress(done, total)` is
@@ -375,11 +396,15 @@ pub fn convert(
     opts: &ConvertOptions,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<ConvertReport> {
-    if same_file(Path::new(input), output) {
-        return Err(Error::invalid(format!(
-            "the output {} is the input: choose another name (inputs are never overwritten)",
-            output.display()
-        )));
+    for file in input_files(input, opts) {
+        if crate::io::same_file(&file, output) {
+            return Err(Error::invalid(format!(
+                "the output {} is the input {}: choose another name (inputs are never \
+                 overwritten)",
+                output.display(),
+                file.display()
+            )));
+        }
     }
     // Settings that need no input are checked before the work starts.
     if let Some(SunSpd::Light(name)) = &opts.sun_spd {
@@ -406,6 +431,7 @@ pub fn convert(
             opts.grid.len() + 4
         )));
     }
+    crate::io::check_output(output)?;
     let t0 = Instant::now();
     let (mut map, description) = read_input(input, opts)?;
     let (mut sanitized, out_of_gamut) = sanitize(&mut map, opts.strict, input, &opts.space)?;

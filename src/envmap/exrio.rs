@@ -430,7 +430,8 @@ fn read_exr_rgb(path: &Path, layer: Option<&str>) -> Result<InputImage> {
 
 /// The cube face names in OpenEXR order (+X -X +Y -Y +Z -Z), as used in `{face}` patterns.
 pub const FACE_NAMES: [&str; 6] = ["px", "nx", "py", "ny", "pz", "nz"];
-const FACE_SIGNED: [&str; 6] = ["+x", "-x", "+y", "-y", "+z", "-z"];
+/// The same faces in the signed spelling (+x, -x, ...) that `{face}` patterns also accept.
+pub const FACE_SIGNED: [&str; 6] = ["+x", "-x", "+y", "-y", "+z", "-z"];
 
 /// Reads six square face images from a pattern with `{face}` replaced by px, nx, py, ny, pz, nz
 /// (or +x, -x, ... when the px form does not exist), in OpenEXR order +X -X +Y -Y +Z -Z.
@@ -804,7 +805,10 @@ impl SpectralWriter {
         })?;
 
         let tmp = crate::io::temp_path_for(dest)?;
-        let file = File::create(&tmp).map_err(|e| io_err(&tmp, e))?;
+        let file = File::create(&tmp).map_err(|e| {
+            crate::io::discard_temp(&tmp);
+            io_err(dest, e)
+        })?;
         let lines_per_block = exr_compression.scan_lines_per_block();
         let (sender, receiver) = sync_channel::<Encoded>(QUEUED_CHUNKS);
         let file_headers = headers.clone();
@@ -819,7 +823,7 @@ impl SpectralWriter {
                 })
             })
             .map_err(|e| {
-                let _ = std::fs::remove_file(&tmp);
+                crate::io::discard_temp(&tmp);
                 io_err(dest, e)
             })?;
         Ok(SpectralWriter {
@@ -1127,7 +1131,7 @@ impl SpectralWriter {
         self.sender = None;
         self.join_worker()?;
         let bytes = std::fs::metadata(&self.tmp)
-            .map_err(|e| io_err(&self.tmp, e))?
+            .map_err(|e| io_err(&self.dest, e))?
             .len();
         crate::io::rename_into_place(&self.tmp, &self.dest)?;
         self.finished = true;
@@ -1140,7 +1144,7 @@ impl Drop for SpectralWriter {
         if !self.finished {
             self.sender = None;
             let _ = self.join_worker();
-            let _ = std::fs::remove_file(&self.tmp);
+            crate::io::discard_temp(&self.tmp);
         }
     }
 }

@@ -298,7 +298,7 @@ pub fn write_heatmap(
     let tmp = crate::io::temp_path_for(path)?;
     img.save_with_format(&tmp, image::ImageFormat::Png)
         .map_err(|e| {
-            let _ = std::fs::remove_file(&tmp);
+            crate::io::discard_temp(&tmp);
             Error::invalid(format!("{}: cannot write the heatmap: {e}", path.display()))
         })?;
     crate::io::rename_into_place(&tmp, path)

@@ -33,7 +33,7 @@ impl Image {
         let tmp = crate::io::temp_path_for(path)?;
         img.save_with_format(&tmp, ::image::ImageFormat::Png)
             .map_err(|e| {
-                let _ = std::fs::remove_file(&tmp);
+                crate::io::discard_temp(&tmp);
                 Error::invalid(format!("{}: writing PNG: {e}", path.display()))
             })?;
         crate::io::rename_into_place(&tmp, path)
@@ -48,7 +48,7 @@ impl Image {
             (p[0] * k, p[1] * k, p[2] * k)
         })
         .map_err(|e| {
-            let _ = std::fs::remove_file(&tmp);
+            crate::io::discard_temp(&tmp);
             Error::invalid(format!("{}: writing OpenEXR: {e}", path.display()))
         })?;
         crate::io::rename_into_place(&tmp, path)

@@ -1,0 +1,151 @@
+//! The check every command makes before any work: no output is one of its inputs (inputs are
+//! never overwritten) or another of its outputs, and every output may be written (absent, or a
+//! regular file: never a directory, device, fifo or socket; in a folder that takes new files).
+
+use std::path::{Path, PathBuf};
+
+/// What a command reads and writes, each with the flag that named it.
+#[derive(Debug, Default)]
+pub struct Guard {
+    inputs: Vec<(String, PathBuf)>,
+    outputs: Vec<(String, PathBuf)>,
+}
+
+impl Guard {
+    pub fn new() -> Guard {
+        Guard::default()
+    }
+
+    /// A file the command reads, with the flag that names it ("" for a positional argument).
+    /// One that does not exist is skipped: reading it fails with its own message, and it cannot
+    /// be overwritten.
+    pub fn input(&mut self, what: &str, path: impl AsRef<Path>) -> &mut Guard {
+        let path = path.as_ref();
+        if path.is_file() {
+            self.inputs.push((what.to_string(), path.to_path_buf()));
+        }
+        self
+    }
+
+    /// A spectrum or index argument: TABLE, TABLE:COLUMN, PATH, PATH:COLUMN, or
+    /// INDEX:THICKNESS; whichever of the whole and the part before the last ':' is a file.
+    pub fn spec(&mut self, what: &str, spec: &str) -> &mut Guard {
+        self.input(what, spec);
+        if let Some((head, _)) = spec.rsplit_once(':') {
+            if !head.is_empty() {
+                self.input(what, head);
+            }
+        }
+        self
+    }
+
+    /// Several [`Guard::spec`] arguments, comma-separated (`--layers`, `--film`).
+    pub fn spec_list(&mut self, what: &str, list: &str) -> &mut Guard {
+        for part in list.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+            self.spec(what, part);
+        }
+        self
+    }
+
+    /// A file the command writes.
+    pub fn output(&mut self, what: &str, path: impl AsRef<Path>) -> &mut Guard {
+        self.outputs
+            .push((what.to_string(), path.as_ref().to_path_buf()));
+        self
+    }
+
+    /// Fails, naming both files, when an output is an input or another output, or naming the
+    /// output when it cannot be replaced by a regular file. Nothing is written.
+    pub fn check(&self) -> anyhow::Result<()> {
+        for (i, (what, out)) in self.outputs.iter().enumerate() {
+            for (in_what, input) in &self.inputs {
+                if specmap::io::same_file(out, input) {
+                    let named = if in_what.is_empty() {
+                        input.display().to_string()
+                    } else {
+                        format!("{in_what} {}", input.display())
+                    };
+                    anyhow::bail!(
+                        "{what} {} is the input {named} (the same file): choose another name for \
+                         the output (inputs are never overwritten)",
+                        out.display(),
+                    );
+                }
+            }
+            for (other_what, other) in &self.outputs[..i] {
+                if specmap::io::same_file(out, other) {
+                    anyhow::bail!(
+                        "{other_what} {} and {what} {} are the same file: give each output its \
+                         own name",
+                        other.display(),
+                        out.display()
+                    );
+                }
+            }
+            specmap::io::check_output_kind(out)?;
+            // A folder that exists but takes no new file fails now, not after the work.
+            if out
+                .parent()
+                .is_none_or(|p| p.as_os_str().is_empty() || p.is_dir())
+            {
+                let probe = specmap::io::temp_path_for(out)?;
+                specmap::io::discard_temp(&probe);
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_output_that_is_an_input_is_refused_naming_both() {
+        let d = tempfile::tempdir().unwrap();
+        let csv = d.path().join("lamp.csv");
+        std::fs::write(&csv, "wavelength_nm,v\n400,1\n").unwrap();
+        let spelled = d.path().join(".").join("lamp.csv");
+        let e = Guard::new()
+            .spec("--light", &format!("{}:v", csv.display()))
+            .output("--plot", &spelled)
+            .check()
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("--plot") && e.contains("--light"), "{e}");
+        assert!(e.contains(&csv.display().to_string()), "{e}");
+        assert!(e.contains("inputs are never overwritten"), "{e}");
+    }
+
+    #[test]
+    fn outputs_must_differ_from_each_other_but_not_from_missing_inputs() {
+        let d = tempfile::tempdir().unwrap();
+        let a = d.path().join("a.png");
+        let e = Guard::new()
+            .input("input", d.path().join("missing.exr"))
+            .output("-o", &a)
+            .output("--plot", d.path().join("x").join("..").join("a.png"))
+            .check();
+        // x/ does not exist, so x/../a.png is not resolved to a.png; the same spelling is.
+        assert!(e.is_ok());
+        let e = Guard::new()
+            .output("-o", &a)
+            .output("--plot", &a)
+            .check()
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("are the same file"), "{e}");
+    }
+
+    #[test]
+    fn a_layer_list_names_its_index_tables() {
+        let d = tempfile::tempdir().unwrap();
+        let nk = d.path().join("nk.csv");
+        std::fs::write(&nk, "wavelength_nm,n,k\n400,1.5,0\n").unwrap();
+        let e = Guard::new()
+            .spec_list("--layers", &format!("2.7:270, {}:100", nk.display()))
+            .output("--plot", &nk)
+            .check();
+        assert!(e.is_err());
+    }
+}
