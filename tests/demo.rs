@@ -193,3 +193,31 @@ fn a_missing_map_is_a_clear_error_and_writes_nothing() {
         "nothing is created before the input is found"
     );
 }
+
+#[test]
+fn a_map_that_is_not_an_image_fails_before_anything_is_written() {
+    // Found but unreadable (text named .exr), or readable but no environment layout (3:1).
+    let t = tempfile::tempdir().unwrap();
+    let text = t.path().join("text.exr");
+    std::fs::write(&text, "not an image").unwrap();
+    let wide = t.path().join("wide.exr");
+    exr::prelude::write_rgb_file(&wide, 12, 4, |_, _| (0.5f32, 0.5f32, 0.5f32)).unwrap();
+    for (map, says) in [(&text, "unrecognised"), (&wide, "--in-layout")] {
+        let dir = t.path().join("demo");
+        let out = specmap(&[
+            "demo",
+            "--quick",
+            "--backend",
+            "cpu",
+            "-o",
+            dir.to_str().unwrap(),
+            "--env",
+            map.to_str().unwrap(),
+        ]);
+        assert_eq!(out.status.code(), Some(1));
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(stderr.contains(says), "{stderr}");
+        assert!(!stderr.contains("demo [1/5]"), "work started: {stderr}");
+        assert!(!dir.exists(), "{} was created", dir.display());
+    }
+}

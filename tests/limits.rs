@@ -136,6 +136,11 @@ fn non_finite_and_extreme_arguments_name_the_flag() {
             vec!["color", "D65", "--range", "380:780:0.000001"],
             vec!["at most 100001"],
         ),
+        // An output named for another format than the one written.
+        (
+            vec!["convert", &sunrise, "-o", &x_png],
+            vec!["OpenEXR", ".exr"],
+        ),
     ];
     for (args, parts) in &cases {
         refused(&out_dir, args, parts);

@@ -314,6 +314,16 @@ pub fn run(a: ConvertArgs) -> anyhow::Result<()> {
         guard.input("--fit", p);
     }
     guard.output("-o", &a.output).check()?;
+    let is_exr = a
+        .output
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    if !is_exr {
+        anyhow::bail!(
+            "-o {}: convert writes OpenEXR; name the output .exr",
+            a.output.display()
+        );
+    }
     if let Some(dir) = a.output.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir)
             .with_context(|| format!("creating the output folder {}", dir.display()))?;

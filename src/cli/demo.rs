@@ -12,6 +12,7 @@ use clap::{Args, ValueEnum};
 use specmap::colorimetry::{Cmfs, Observer, RgbSpace};
 use specmap::envmap::convert::{self, ConvertOptions, ConvertReport, LightSpec};
 use specmap::envmap::roundtrip::{round_trip_file, write_heatmap, FileRoundTrip};
+use specmap::envmap::{exrio, layout};
 use specmap::fit::{self, FitInput, Mode};
 use specmap::render::gpu::{AdapterReport, Gpu};
 use specmap::render::prepare::Prepared;
@@ -211,6 +212,19 @@ pub fn run(a: DemoArgs) -> anyhow::Result<()> {
         guard.output("-o", out(name));
     }
     guard.check()?;
+    // The map is read once up front (a 1024x512 map in ~0.05 s): a file that is not an image,
+    // or not an environment layout, fails before anything is written.
+    let probe = exrio::read_rgb(&env_path, None)?;
+    layout::detect(
+        probe.image.width,
+        probe.image.height,
+        probe.envmap.map(|a| match a {
+            exrio::EnvmapAttr::LatLong => layout::Layout::LatLong,
+            exrio::EnvmapAttr::Cube => layout::Layout::Cube,
+        }),
+    )
+    .with_context(|| format!("--env {}", env_path.display()))?;
+    drop(probe);
     let shown = |name: &str| sh(&out(name).display().to_string());
     let mut seconds = Vec::new();
 

@@ -39,6 +39,14 @@ pub fn run(a: RoundtripArgs) -> anyhow::Result<()> {
         guard.output("--heatmap", p);
     }
     guard.check()?;
+    if let Some(p) = &a.heatmap {
+        if !p.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) {
+            anyhow::bail!(
+                "--heatmap {}: the heatmap is a PNG; name it .png",
+                p.display()
+            );
+        }
+    }
     let mut de = Vec::new();
     let r = round_trip_file(
         &a.file,
