@@ -178,6 +178,16 @@ fn nan_in_a_spectral_map_is_left_out_and_huge_values_are_refused() {
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("--heatmap-max"));
     assert!(!hm.exists());
+    let jpg = d.path().join("h.jpg");
+    let out = specmap(&[
+        "roundtrip",
+        nan.to_str().unwrap(),
+        "--heatmap",
+        jpg.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains(".png"));
+    assert!(!jpg.exists());
 
     // render: the NaN pixel is black, the image finite.
     let img = d.path().join("r.exr");
