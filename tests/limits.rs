@@ -285,3 +285,46 @@ fn a_map_with_absurd_values_is_refused_naming_the_pixel() {
         );
     }
 }
+
+#[test]
+fn spectral_channels_that_are_not_wavelengths_are_named() {
+    let d = tempfile::tempdir().unwrap();
+    for (bad, says) in [
+        ("S0.-5nm", "channel S0.-5nm"),
+        ("S0.abcnm", "channel S0.abcnm"),
+        ("S0.550nm", "two channels name the wavelength 550 nm"),
+    ] {
+        let path = d.path().join("bad.exr");
+        let n = 8 * 4;
+        let mut names = ["S0.450nm", "S0.550,000000nm", bad, "R", "G", "B"];
+        names.sort();
+        let list: SmallVec<[AnyChannel<FlatSamples>; 4]> = names
+            .iter()
+            .map(|&name| AnyChannel::new(name, FlatSamples::F32(vec![0.5; n])))
+            .collect();
+        let layer = Layer::new(
+            (8, 4),
+            LayerAttributes::default(),
+            Encoding::FAST_LOSSLESS,
+            AnyChannels::sort(list),
+        );
+        Image::from_layer(layer).write().to_file(&path).unwrap();
+        for args in [
+            vec!["roundtrip", path.to_str().unwrap()],
+            vec![
+                "render",
+                "--size",
+                "8x6",
+                "--backend",
+                "cpu",
+                "--env",
+                path.to_str().unwrap(),
+            ],
+        ] {
+            let out = specmap(&args);
+            let msg = String::from_utf8_lossy(&out.stderr);
+            assert_eq!(out.status.code(), Some(1), "{args:?}: {msg}");
+            assert!(msg.contains(says), "{args:?}: {msg}");
+        }
+    }
+}

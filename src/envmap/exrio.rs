@@ -1213,7 +1213,31 @@ fn spectral_header(path: &Path) -> Result<SpectralHeader> {
             ),
         ));
     }
+    // Channels that look spectral must be: a positive wavelength, each once.
+    for c in &header.channels.list {
+        let name = c.name.to_string();
+        if name.starts_with("S0.") && name.ends_with("nm") {
+            match parse_spectral_channel_name(&name) {
+                Some(nm) if nm.is_finite() && nm > 0.0 && nm < 1e6 => {}
+                _ => {
+                    return Err(parse_err(
+                        path,
+                        format!(
+                            "channel {name}: not a wavelength in nm (a spectral channel is \
+                             S0.<wavelength>nm with a positive wavelength, e.g. S0.550,000000nm)"
+                        ),
+                    ))
+                }
+            }
+        }
+    }
     bands.sort_by(|a, b| a.0.total_cmp(&b.0));
+    if let Some(w) = bands.windows(2).find(|w| w[0].0 == w[1].0) {
+        return Err(parse_err(
+            path,
+            format!("two channels name the wavelength {} nm", w[0].0),
+        ));
+    }
     let rgb: Option<Vec<usize>> = ["R", "G", "B"]
         .iter()
         .map(|n| {

@@ -93,6 +93,8 @@ pub fn round_trip_file(
     rule: Rule,
     mut heatmap: Option<&mut Vec<f32>>,
 ) -> Result<FileRoundTrip> {
+    // The spectral channels checked (positive wavelengths, each once) as every reader does.
+    crate::envmap::exrio::read_spectral_info(path)?;
     // First pass over the header: wavelengths, attributes (read_spectral_rows gives them at the
     // end, so peek with a cheap metadata read).
     let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| Error::Parse {
@@ -119,13 +121,18 @@ pub fn round_trip_file(
     let cmf_table = crate::data::Table::builtin(observer.table_name())?;
     let at = |col: &str| -> Result<Vec<f64>> {
         let t: Tabulated = cmf_table.column(col)?;
-        Ok(wavelengths
+        let (lo, hi) = t.range_nm();
+        wavelengths
             .iter()
             .map(|&w| {
-                let g = WavelengthGrid::new(w, w, 1.0).expect("one wavelength");
-                t.resample(&g, Interpolation::SMOOTH).values()[0]
+                // The observer sees nothing outside its tables (as `Cmfs::new`).
+                if !(lo..=hi).contains(&w) {
+                    return Ok(0.0);
+                }
+                let g = WavelengthGrid::new(w, w, 1.0)?;
+                Ok(t.resample(&g, Interpolation::SMOOTH).values()[0])
             })
-            .collect())
+            .collect()
     };
     let (xb, yb, zb) = (at("x")?, at("y")?, at("z")?);
     let weights: Vec<f64> = match Tabulated::new(wavelengths.clone(), vec![0.0; wavelengths.len()])?
