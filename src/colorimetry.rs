@@ -88,6 +88,13 @@ impl Cmfs {
     /// Eq. 11: k = 100 / integral(S * ybar). An error if the light has no energy in range.
     pub fn k(&self, light: &Spectrum, rule: Rule) -> Result<f64> {
         let y = light.try_mul(&self.y)?.integrate(rule);
+        if y.is_infinite() {
+            return Err(Error::invalid(format!(
+                "the light's values overflow: the integral of S * ybar over {} is {y:e}; scale \
+                 the spectrum down",
+                self.grid()
+            )));
+        }
         if !(y.is_finite() && y > 0.0) {
             return Err(Error::invalid(format!(
                 "the light has no visible energy in {} (integral of S * ybar = {y:e})",
