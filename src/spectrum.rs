@@ -27,6 +27,16 @@ pub struct WavelengthGrid {
     len: usize,
 }
 
+/// A number for a message: as written for ordinary magnitudes, in exponent form for very large
+/// or small ones (`1e308`, not 309 digits).
+pub fn fmt_num(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() || (1e-4..1e16).contains(&v.abs()) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
+}
+
 /// The most samples a [`WavelengthGrid`] holds: 0.01 nm over 1000 nm, 100x finer than the
 /// finest published tables, and small enough that every command stays within seconds and memory.
 pub const MAX_SAMPLES: usize = 100_001;
@@ -35,39 +45,44 @@ impl WavelengthGrid {
     /// The grid from `start_nm` to `end_nm` inclusive with the given step. The step must divide
     /// the range (to 1e-9 relative) and both ends must be finite and positive.
     pub fn new(start_nm: f64, end_nm: f64, step_nm: f64) -> Result<Self> {
+        let (a, b, h) = (fmt_num(start_nm), fmt_num(end_nm), fmt_num(step_nm));
         if !(start_nm.is_finite() && end_nm.is_finite() && step_nm.is_finite()) {
             return Err(Error::invalid(format!(
-                "wavelength range {start_nm}:{end_nm}:{step_nm} is not finite"
+                "wavelength range {a}:{b}:{h} is not finite"
             )));
         }
         if start_nm <= 0.0 {
             return Err(Error::invalid(format!(
-                "wavelength range starts at {start_nm} nm; it must start above 0 nm"
+                "wavelength range starts at {a} nm; it must start above 0 nm"
             )));
         }
         if step_nm <= 0.0 {
             return Err(Error::invalid(format!(
-                "wavelength step {step_nm} nm must be positive"
+                "wavelength step {h} nm must be positive"
             )));
         }
         if end_nm < start_nm {
             return Err(Error::invalid(format!(
-                "wavelength range {start_nm}:{end_nm} ends before it starts"
+                "wavelength range {a}:{b} ends before it starts"
             )));
         }
         let intervals = (end_nm - start_nm) / step_nm;
         let rounded = intervals.round();
         if (intervals - rounded).abs() > 1e-9 * rounded.max(1.0) {
             return Err(Error::invalid(format!(
-                "step {step_nm} nm does not divide the range {start_nm}..{end_nm} nm \
-                 ({intervals:.4} steps)"
+                "step {h} nm does not divide the range {a}..{b} nm ({} steps)",
+                if intervals < 1e6 {
+                    format!("{intervals:.4}")
+                } else {
+                    fmt_num(intervals)
+                }
             )));
         }
         if rounded >= MAX_SAMPLES as f64 {
             return Err(Error::invalid(format!(
-                "wavelength range {start_nm}:{end_nm}:{step_nm} has {} samples; at most \
+                "wavelength range {a}:{b}:{h} has {} samples; at most \
                  {MAX_SAMPLES} (0.01 nm over 1000 nm)",
-                rounded + 1.0
+                fmt_num(rounded + 1.0)
             )));
         }
         Ok(Self {
@@ -115,7 +130,13 @@ impl WavelengthGrid {
 
 impl fmt::Display for WavelengthGrid {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}:{}:{}", self.start_nm, self.end_nm(), self.step_nm)
+        write!(
+            f,
+            "{}:{}:{}",
+            fmt_num(self.start_nm),
+            fmt_num(self.end_nm()),
+            fmt_num(self.step_nm)
+        )
     }
 }
 
@@ -578,6 +599,22 @@ impl Spectrum {
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn extreme_numbers_read_short_in_messages() {
+        assert_eq!(fmt_num(380.0), "380");
+        assert_eq!(fmt_num(0.5), "0.5");
+        assert_eq!(fmt_num(1e308), "1e308");
+        assert_eq!(fmt_num(1e-300), "1e-300");
+        let e = WavelengthGrid::new(400.0, 700.0, 1e-300)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("400:700:1e-300") && e.len() < 200, "{e}");
+        let e = WavelengthGrid::new(400.0, 1e300, 7.0)
+            .unwrap_err()
+            .to_string();
+        assert!(e.len() < 200, "{e}");
+    }
     use super::*;
 
     fn grid(a: f64, b: f64, s: f64) -> WavelengthGrid {

@@ -602,9 +602,10 @@ impl<T: Real> Film<T> {
             let cycles = index.n.hypot(index.k) * thickness / wavelength_nm;
             if cycles.is_nan() || cycles > MAX_CYCLES {
                 return Err(Error::invalid(format!(
-                    "layer {}: {thickness} nm is {cycles:e} wavelengths thick at {wavelength_nm} \
-                     nm; at most {MAX_CYCLES:e}",
-                    i + 1
+                    "layer {}: {} nm is {cycles:e} wavelengths thick at {wavelength_nm} nm; at \
+                     most {MAX_CYCLES:e}",
+                    i + 1,
+                    crate::spectrum::fmt_num(*thickness)
                 )));
             }
             n.push(index.complex());

@@ -249,9 +249,11 @@ pub fn choose_grid(
     rule: Rule,
     tolerance: f64,
 ) -> Result<GridChoice> {
-    if !(tolerance.is_finite() && tolerance > 0.0) {
+    if !(tolerance.is_finite() && tolerance > 0.0 && tolerance <= 100.0) {
         return Err(Error::invalid(format!(
-            "--tolerance {tolerance} must be a positive CIEDE2000 difference"
+            "--tolerance {}: a CIEDE2000 difference between 0 and 100 (1 is about a just \
+             noticeable difference)",
+            crate::spectrum::fmt_num(tolerance)
         )));
     }
     if stimuli.is_empty() {

@@ -136,6 +136,10 @@ fn non_finite_and_extreme_arguments_name_the_flag() {
             vec!["color", "D65", "--range", "380:780:0.000001"],
             vec!["at most 100001"],
         ),
+        (
+            vec!["color", "FL2", "--tolerance", "1e308"],
+            vec!["--tolerance 1e308", "100"],
+        ),
         // An output named for another format than the one written.
         (
             vec!["convert", &sunrise, "-o", &x_png],
