@@ -2,22 +2,11 @@
 
 use exr::prelude::*;
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Command;
 
-fn specmap(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_specmap"))
-        .args(args)
-        .output()
-        .expect("the specmap binary runs")
-}
+mod common;
 
-fn sample(name: &str) -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("envmaps")
-        .join(name)
-        .display()
-        .to_string()
-}
+use common::{sample, specmap};
 
 fn convert_json(args: &[&str]) -> serde_json::Value {
     let mut all = vec!["convert"];

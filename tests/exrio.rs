@@ -1,5 +1,8 @@
 //! EXR/HDR input and streaming spectral EXR output: round trips checked with exr's own reader, bad input.
 
+mod common;
+
+use common::write_channels;
 use exr::prelude::{
     f16, read_all_flat_layers_from_file, AnyChannel, AnyChannels, Encoding, FlatSamples, Image,
     Layer, LayerAttributes, SmallVec, WritableImage,
@@ -498,20 +501,6 @@ fn sample_maps_read_like_exr_reader() {
         }
         assert_eq!(sums(&input.image), want, "{name}");
     }
-}
-
-fn write_channels(path: &Path, w: usize, h: usize, channels: Vec<(&str, Vec<f32>)>) {
-    let list: SmallVec<[AnyChannel<FlatSamples>; 4]> = channels
-        .into_iter()
-        .map(|(n, v)| AnyChannel::new(n, FlatSamples::F32(v)))
-        .collect();
-    let layer = Layer::new(
-        (w, h),
-        LayerAttributes::default(),
-        Encoding::FAST_LOSSLESS,
-        AnyChannels::sort(list),
-    );
-    Image::from_layer(layer).write().to_file(path).unwrap();
 }
 
 #[test]

@@ -1,27 +1,10 @@
 //! Arguments and inputs at the extremes: refused with a message naming the flag or the pixel,
 //! or carried without NaN, never a crash, an overflowed image or a silent black result.
 
-use exr::prelude::{
-    AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer, LayerAttributes, SmallVec,
-    WritableImage,
-};
+mod common;
+
+use common::{sample, specmap, write_channels};
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn specmap(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_specmap"))
-        .args(args)
-        .output()
-        .expect("the specmap binary runs")
-}
-
-fn sample(name: &str) -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("envmaps")
-        .join(name)
-        .display()
-        .to_string()
-}
 
 /// Runs a command that must fail with exit 1 (or clap's 2) and a message holding `parts`,
 /// leaving `dir` empty.
@@ -45,32 +28,21 @@ fn refused(dir: &Path, args: &[&str], parts: &[&str]) {
 /// specmap's writer, lets a test put NaN or huge values in it.
 fn spectral_exr(path: &Path, bad: Option<(usize, f32)>) {
     let (w, h) = (16usize, 8usize);
-    let wl = [400.0, 500.0, 600.0, 700.0];
-    let n = w * h;
-    let mut channels: Vec<(String, Vec<f32>)> = wl
-        .iter()
-        .map(|&l| {
-            let name = format!("S0.{l:.0},000000nm");
-            (name, vec![0.5f32; n])
-        })
-        .collect();
-    for c in ["R", "G", "B"] {
-        channels.push((c.to_string(), vec![0.5f32; n]));
-    }
+    let names = [
+        "S0.400,000000nm",
+        "S0.500,000000nm",
+        "S0.600,000000nm",
+        "S0.700,000000nm",
+        "R",
+        "G",
+        "B",
+    ];
+    let mut channels: Vec<(&str, Vec<f32>)> =
+        names.iter().map(|&n| (n, vec![0.5f32; w * h])).collect();
     if let Some((i, v)) = bad {
         channels[1].1[i] = v;
     }
-    let list: SmallVec<[AnyChannel<FlatSamples>; 4]> = channels
-        .into_iter()
-        .map(|(name, v)| AnyChannel::new(name.as_str(), FlatSamples::F32(v)))
-        .collect();
-    let layer = Layer::new(
-        (w, h),
-        LayerAttributes::default(),
-        Encoding::FAST_LOSSLESS,
-        AnyChannels::sort(list),
-    );
-    Image::from_layer(layer).write().to_file(path).unwrap();
+    write_channels(path, w, h, channels);
 }
 
 #[test]
@@ -299,20 +271,13 @@ fn spectral_channels_that_are_not_wavelengths_are_named() {
         ("S0.550nm", "two channels name the wavelength 550 nm"),
     ] {
         let path = d.path().join("bad.exr");
-        let n = 8 * 4;
-        let mut names = ["S0.450nm", "S0.550,000000nm", bad, "R", "G", "B"];
-        names.sort();
-        let list: SmallVec<[AnyChannel<FlatSamples>; 4]> = names
-            .iter()
-            .map(|&name| AnyChannel::new(name, FlatSamples::F32(vec![0.5; n])))
-            .collect();
-        let layer = Layer::new(
-            (8, 4),
-            LayerAttributes::default(),
-            Encoding::FAST_LOSSLESS,
-            AnyChannels::sort(list),
+        let names = ["S0.450nm", "S0.550,000000nm", bad, "R", "G", "B"];
+        write_channels(
+            &path,
+            8,
+            4,
+            names.iter().map(|&n| (n, vec![0.5f32; 8 * 4])).collect(),
         );
-        Image::from_layer(layer).write().to_file(&path).unwrap();
         for args in [
             vec!["roundtrip", path.to_str().unwrap()],
             vec![

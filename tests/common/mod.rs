@@ -1,0 +1,42 @@
+//! Helpers shared by the integration tests (each test file uses a subset).
+#![allow(dead_code)]
+
+use exr::prelude::{
+    AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer, LayerAttributes, SmallVec,
+    WritableImage,
+};
+use std::path::Path;
+use std::process::{Command, Output};
+
+/// Runs the `specmap` binary built for the tests.
+pub fn specmap(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_specmap"))
+        .args(args)
+        .output()
+        .expect("the specmap binary runs")
+}
+
+/// A bundled sample map in envmaps/, as a path string.
+pub fn sample(name: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("envmaps")
+        .join(name)
+        .display()
+        .to_string()
+}
+
+/// Writes a single-part scan-line EXR of f32 channels (sorted by name, as OpenEXR stores them)
+/// with the exr crate: an independent writer, which also lets a test put NaN or huge values in.
+pub fn write_channels(path: &Path, w: usize, h: usize, channels: Vec<(&str, Vec<f32>)>) {
+    let list: SmallVec<[AnyChannel<FlatSamples>; 4]> = channels
+        .into_iter()
+        .map(|(n, v)| AnyChannel::new(n, FlatSamples::F32(v)))
+        .collect();
+    let layer = Layer::new(
+        (w, h),
+        LayerAttributes::default(),
+        Encoding::FAST_LOSSLESS,
+        AnyChannels::sort(list),
+    );
+    Image::from_layer(layer).write().to_file(path).unwrap();
+}
