@@ -2,7 +2,7 @@
 //! with the file's own R, G, B preview (the original pixels), pixel by pixel, streaming.
 
 use crate::colorimetry::{delta_e_2000, Lab, Observer, RgbSpace};
-use crate::envmap::exrio::read_spectral_rows;
+use crate::envmap::exrio::{read_spectral_rows, AttrValue, EnvmapAttr};
 use crate::envmap::layout::{detect, EnvMap, Layout};
 use crate::envmap::RgbImage;
 use crate::error::{Error, Result};
@@ -93,30 +93,17 @@ pub fn round_trip_file(
     rule: Rule,
     mut heatmap: Option<&mut Vec<f32>>,
 ) -> Result<FileRoundTrip> {
-    // The spectral channels checked (positive wavelengths, each once) as every reader does.
-    crate::envmap::exrio::read_spectral_info(path)?;
-    // First pass over the header: wavelengths, attributes (read_spectral_rows gives them at the
-    // end, so peek with a cheap metadata read).
-    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| Error::Parse {
-        file: path.to_path_buf(),
-        line: None,
-        message: format!("not a readable OpenEXR file: {e}"),
-    })?;
-    let header = &meta.headers[0];
-    let mut wavelengths: Vec<f64> = header
-        .channels
-        .list
-        .iter()
-        .filter_map(|c| crate::envmap::exrio::parse_spectral_channel_name(&c.name.to_string()))
-        .collect();
-    wavelengths.sort_by(f64::total_cmp);
+    // The header once: size, the checked wavelengths (positive, each once, sorted) and the
+    // attributes; the pixels follow in read_spectral_rows.
+    let header = crate::envmap::exrio::read_spectral_info(path)?;
+    let wavelengths = header.wavelengths_nm.clone();
     if wavelengths.len() < 2 {
         return Err(Error::invalid(format!(
             "{}: a round trip needs at least two S0.<wavelength>nm channels",
             path.display()
         )));
     }
-    let (width, height) = (header.layer_size.0, header.layer_size.1);
+    let (width, height) = (header.width, header.height);
     // CMFs at the file's wavelengths, with the rule's weights (non-uniform grids: trapezoid).
     let cmf_table = crate::data::Table::builtin(observer.table_name())?;
     let at = |col: &str| -> Result<Vec<f64>> {
@@ -162,40 +149,25 @@ pub fn round_trip_file(
     let y_norm: f64 = yb.iter().zip(&weights).map(|(y, w)| y * w).sum();
     let mut info_space = RgbSpace::SRGB;
     let mut white_balance = None;
-    for (name, value) in header.own_attributes.other.iter() {
-        let name = name.to_string();
-        if name == "specmap.space" {
-            if let exr::meta::attribute::AttributeValue::Text(t) = value {
-                let t = t.to_string();
-                if let Some(s) = RgbSpace::ALL.into_iter().find(|s| s.name == t) {
+    for (name, value) in &header.attributes {
+        match (name.as_str(), value) {
+            ("specmap.space", AttrValue::Text(t)) => {
+                if let Some(s) = RgbSpace::ALL.into_iter().find(|s| s.name == *t) {
                     info_space = s;
                 }
             }
-        }
-        if name == "specmap.lightRGB" {
-            // OpenEXR's `floatvector`: little-endian f32s.
-            if let exr::meta::attribute::AttributeValue::Custom { kind, bytes } = value {
-                if kind == "floatvector" && bytes.len() == 12 {
-                    let f = |i: usize| {
-                        f32::from_le_bytes([bytes[i], bytes[i + 1], bytes[i + 2], bytes[i + 3]])
-                            as f64
-                    };
-                    white_balance = Some([f(0), f(4), f(8)]);
-                }
+            ("specmap.lightRGB", AttrValue::F32Vec(v)) if v.len() == 3 => {
+                white_balance = Some([v[0] as f64, v[1] as f64, v[2] as f64]);
             }
+            _ => {}
         }
     }
     let space = info_space;
     let m = space.from_xyz_matrix();
     let white = space.xyz_from_rgb([1.0, 1.0, 1.0]);
-    let envmap = header.own_attributes.other.iter().find_map(|(k, v)| {
-        (k == "envmap").then_some(v).and_then(|v| match v {
-            exr::meta::attribute::AttributeValue::EnvironmentMap(e) => Some(match e {
-                exr::meta::attribute::EnvironmentMap::LatitudeLongitude => Layout::LatLong,
-                exr::meta::attribute::EnvironmentMap::Cube => Layout::Cube,
-            }),
-            _ => None,
-        })
+    let envmap = header.envmap.map(|e| match e {
+        EnvmapAttr::LatLong => Layout::LatLong,
+        EnvmapAttr::Cube => Layout::Cube,
     });
     let layout = detect(width, height, envmap).ok();
     let solid = layout.and_then(|l| EnvMap::new(l, RgbImage::new(width, height)).ok());
