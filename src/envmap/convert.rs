@@ -406,7 +406,9 @@ pub fn convert(
             )));
         }
     }
-    // Settings that need no input are checked before the work starts.
+    // Settings that need no input are checked before the work starts; a named sun SPD is
+    // loaded here once, for use if a sun is found.
+    let mut sun_light = None;
     if let Some(SunSpd::Light(name)) = &opts.sun_spd {
         let s = data::spectrum(name)?;
         let (lo, hi) = s
@@ -422,6 +424,7 @@ pub fn convert(
                  (values from {lo} to {hi})"
             )));
         }
+        sun_light = Some((s.label, s.data));
     }
     if opts.format == OutputFormat::Spectral && opts.grid.len() > MAX_BANDS {
         return Err(Error::invalid(format!(
@@ -537,10 +540,7 @@ pub fn convert(
             };
             Some((label, illuminant::natural(k)?))
         }
-        (Some(_), SunSpd::Light(name)) => {
-            let s = data::spectrum(name)?;
-            Some((s.label, s.data))
-        }
+        (Some(_), SunSpd::Light(_)) => sun_light,
     };
     // The grid: as given, or the coarsest step within its range that keeps the ColorChecker
     // under the main light (and under the sun's SPD) within --tolerance.
