@@ -164,12 +164,9 @@ fn text_from_the_input_is_escaped_and_file_names_made_safe() {
     assert!(dir.join("a_b__x_.spectral.exr").is_file());
 }
 
-#[test]
-fn a_missing_map_is_a_clear_error_and_writes_nothing() {
-    let t = tempfile::tempdir().unwrap();
-    let dir = t.path().join("demo");
-    let missing = t.path().join("nope.exr");
-    let out = specmap(&[
+/// `specmap demo --quick --backend cpu -o DIR --env MAP`, expected to fail.
+fn quick_demo_on(dir: &Path, map: &Path) -> Output {
+    specmap(&[
         "demo",
         "--quick",
         "--backend",
@@ -177,8 +174,16 @@ fn a_missing_map_is_a_clear_error_and_writes_nothing() {
         "-o",
         dir.to_str().unwrap(),
         "--env",
-        missing.to_str().unwrap(),
-    ]);
+        map.to_str().unwrap(),
+    ])
+}
+
+#[test]
+fn a_missing_map_is_a_clear_error_and_writes_nothing() {
+    let t = tempfile::tempdir().unwrap();
+    let dir = t.path().join("demo");
+    let missing = t.path().join("nope.exr");
+    let out = quick_demo_on(&dir, &missing);
     assert_eq!(out.status.code(), Some(1));
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(
@@ -204,16 +209,7 @@ fn a_map_that_is_not_an_image_fails_before_anything_is_written() {
     exr::prelude::write_rgb_file(&wide, 12, 4, |_, _| (0.5f32, 0.5f32, 0.5f32)).unwrap();
     for (map, says) in [(&text, "unrecognised"), (&wide, "--in-layout")] {
         let dir = t.path().join("demo");
-        let out = specmap(&[
-            "demo",
-            "--quick",
-            "--backend",
-            "cpu",
-            "-o",
-            dir.to_str().unwrap(),
-            "--env",
-            map.to_str().unwrap(),
-        ]);
+        let out = quick_demo_on(&dir, map);
         assert_eq!(out.status.code(), Some(1));
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert!(stderr.contains(says), "{stderr}");
