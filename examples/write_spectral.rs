@@ -66,6 +66,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         envmap: Some(EnvmapAttr::LatLong),
         ev: None,
         zip_level: specmap::envmap::exrio::ZIP_DEFAULT_LEVEL,
+        unscaled: Vec::new(),
         attributes: vec![
             ("mainLight".into(), AttrValue::Text("D65".into())),
             ("fitMode".into(), AttrValue::Text("exact".into())),

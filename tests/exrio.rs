@@ -59,6 +59,7 @@ fn layout(
         ev: None,
         attributes: vec![],
         zip_level: ZIP_DEFAULT_LEVEL,
+        unscaled: Vec::new(),
     }
 }
 

@@ -73,6 +73,7 @@ fn write_map(
             ev: None,
             attributes: vec![],
             zip_level: specmap::envmap::exrio::ZIP_DEFAULT_LEVEL,
+            unscaled: Vec::new(),
         },
     )
     .unwrap();
@@ -375,6 +376,7 @@ fn bad_inputs_get_clear_errors() {
             ev: None,
             attributes: vec![],
             zip_level: specmap::envmap::exrio::ZIP_DEFAULT_LEVEL,
+            unscaled: Vec::new(),
         },
     )
     .unwrap();

@@ -4,12 +4,13 @@ use super::{outln, SpaceArg};
 use anyhow::Context;
 use clap::{Args, ValueEnum};
 use specmap::envmap::convert::{
-    self, ConvertOptions, LightSpec, Method, OutputFormat, SkySpd, SunSpd, WhiteSpec,
+    self, ConvertOptions, LightSpec, Lights, Method, OutputFormat, SkySpd, SunSpd, WhiteSpec,
 };
 use specmap::envmap::engine::WhitePremise;
 use specmap::envmap::exrio::{Compression, Precision};
 use specmap::envmap::layout::{Layout, Orientation, Up};
-use specmap::envmap::sun::{SunSearch, SunSettings};
+use specmap::envmap::scene::ReflectorModel;
+use specmap::envmap::sun::SunSettings;
 use specmap::fit::Fit;
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -22,10 +23,20 @@ pub struct ConvertArgs {
     /// Output OpenEXR (written to a temporary file, then renamed).
     #[arg(short, long, value_name = "OUT.exr")]
     output: PathBuf,
-    /// Main light: a table name or CSV, or `auto` to choose it (and, unless --white says, the
-    /// white premise) from the scene.
-    #[arg(long, default_value = "D65")]
+    /// `auto` (the default): every light the scene holds, found and classified (sun, sky,
+    /// windows, lamps of their families); a table name or CSV: the spectrum of the lamps (the
+    /// sun, sky and windows keep daylight), or with --lights one of every non-sun pixel.
+    #[arg(long, default_value = "auto")]
     light: String,
+    /// `all`: the scene's lights, each pixel carried by the light(s) that light it; `one`: the
+    /// paper's premise, one main light for every pixel but the sun's.
+    #[arg(long, value_enum, default_value_t = LightsArg::All)]
+    lights: LightsArg,
+    /// How reflectors' light is estimated: `local` (from the colour of the reflectors around
+    /// each pixel, a local grey world) or `global` (every light in the proportions of its
+    /// energy).
+    #[arg(long, value_enum, default_value_t = ReflectorsArg::Local)]
+    reflectors: ReflectorsArg,
     /// What RGB (1,1,1) is: `light` (the map is white-balanced to its main light, the paper's
     /// premise), `d65` (D65-referenced: a sodium lamp looks orange), or `auto` (the brightest
     /// regions decide). Default: auto, except `light` for paper/exact/nonneg with a named light.
@@ -112,6 +123,18 @@ pub struct ConvertArgs {
 
 /// The largest `--size`: a lat-long height or a cube face (the renderer's limit too).
 const MAX_SIZE: usize = 16384;
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum LightsArg {
+    All,
+    One,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum ReflectorsArg {
+    Local,
+    Global,
+}
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
 enum UpArg {
@@ -229,6 +252,14 @@ pub fn run(a: ConvertArgs) -> anyhow::Result<()> {
             LightSpec::Auto
         } else {
             LightSpec::Named(a.light.clone())
+        },
+        lights: match a.lights {
+            LightsArg::All => Lights::All,
+            LightsArg::One => Lights::One,
+        },
+        reflectors: match a.reflectors {
+            ReflectorsArg::Local => ReflectorModel::Local,
+            ReflectorsArg::Global => ReflectorModel::Global,
         },
         space: fit
             .as_ref()
@@ -379,10 +410,7 @@ pub fn run(a: ConvertArgs) -> anyhow::Result<()> {
             r.sanitized.negative_kept
         );
     }
-    match &r.light_choice {
-        Some(c) => outln!(out, "  light        {} (auto: {})", r.light, c.reason),
-        None => outln!(out, "  light        {}", r.light),
-    }
+    write_lights(&mut out, r);
     outln!(
         out,
         "  white        RGB (1,1,1) is {} ({})",
@@ -395,28 +423,19 @@ pub fn run(a: ConvertArgs) -> anyhow::Result<()> {
     if let Some(c) = &r.grid_choice {
         super::write_grid_choice(&mut out, c);
     }
-    outln!(
-        out,
-        "  fit          {:?} mode, weights {:.4} {:.4} {:.4}, condition {:.3e}{}",
-        r.mode,
-        r.weights[0],
-        r.weights[1],
-        r.weights[2],
-        r.condition_number,
-        if r.regularized { " (reduced)" } else { "" }
-    );
-    let sp = &r.spectra;
-    outln!(
-        out,
-        "  spectra      {:?} method: {} sun, {} daylight sky, {} smooth x light, {} ColorChecker \
-         x light pixels; {} go negative somewhere",
-        r.method,
-        sp.sun,
-        sp.daylight,
-        sp.smooth,
-        sp.colorchecker,
-        sp.negative
-    );
+    if r.mode != "faithful" {
+        outln!(
+            out,
+            "  fit          {} mode, weights {:.4} {:.4} {:.4}, condition {:.3e}{}",
+            r.mode,
+            r.weights[0],
+            r.weights[1],
+            r.weights[2],
+            r.condition_number,
+            if r.regularized { " (reduced)" } else { "" }
+        );
+    }
+    write_spectra(&mut out, r);
     for n in &r.notes {
         outln!(out, "  note         {n}");
     }
@@ -444,10 +463,75 @@ pub fn run(a: ConvertArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// The lights lines of the report: each light of the scene, or the main light.
+fn write_lights(out: &mut String, r: &convert::ConvertReport) {
+    for l in &r.lights {
+        outln!(
+            out,
+            "  light        {:6} {} ({:.1}% of the energy, {} pixels, {:.1} deg up): {}",
+            format!("{:?}", l.kind).to_lowercase(),
+            l.spd,
+            100.0 * l.energy_share,
+            l.pixels,
+            l.elevation_deg,
+            l.reason
+        );
+    }
+    if r.lights.is_empty() {
+        outln!(out, "  light        none found in the map");
+    }
+    match &r.light_choice {
+        Some(c) => outln!(out, "  main light   {} (auto: {})", r.light, c.reason),
+        None if r.lights_mode == Lights::One || r.mode != "faithful" => {
+            outln!(out, "  main light   {}", r.light)
+        }
+        None => {}
+    }
+    for b in &r.bright_reflectors {
+        outln!(out, "  reflector    {b}");
+    }
+}
+
+/// The spectra line: which spectrum pixels took, and what could not be exact.
+fn write_spectra(out: &mut String, r: &convert::ConvertReport) {
+    let sp = &r.spectra;
+    outln!(
+        out,
+        "  spectra      {} ({} carriers{}): {} sun, {} daylight, {} smooth x carrier, {} \
+         ColorChecker x carrier, {} non-negative fallback, {} clipped lamp pixels, {} nearest \
+         non-negative; {} go negative somewhere",
+        r.mode,
+        r.carriers.len(),
+        if r.carrier_mixes > 0 {
+            format!(" and {} mixes of them", r.carrier_mixes)
+        } else {
+            String::new()
+        },
+        sp.sun,
+        sp.daylight,
+        sp.smooth,
+        sp.colorchecker,
+        sp.nonneg,
+        sp.clipped,
+        sp.nearest,
+        sp.negative
+    );
+    if r.inexact.pixels > 0 {
+        outln!(
+            out,
+            "  inexact      {} pixels could not keep their colour: CIEDE2000 energy-weighted mean \
+             {:.3}, max {:.3}",
+            r.inexact.pixels,
+            r.inexact.weighted_mean_de2000,
+            r.inexact.max_de2000
+        );
+    }
+}
+
 /// The sun line of the report: where it is, how much energy, the SPD it was given.
 pub(super) fn sun_text(r: &convert::ConvertReport) -> String {
-    match &r.sun {
-        SunSearch::Found(s) => format!(
+    match &r.sun.sun {
+        Some(s) => format!(
             "{} pixels, elevation {:.1}°, azimuth {:.1}°, {:.2e} sr, {:.1}% of the energy, {}{} -> \
              {}",
             s.pixel_count,
@@ -455,14 +539,13 @@ pub(super) fn sun_text(r: &convert::ConvertReport) -> String {
             s.azimuth_deg,
             s.solid_angle_sr,
             100.0 * s.energy_share,
-            s.cct
-                .kelvin
+            s.cct_k
                 .map(|k| format!("CCT {k:.0} K"))
                 .unwrap_or_else(|| "no CCT".into()),
             if s.clipped { ", clipped" } else { "" },
             r.sun_spd.as_deref().unwrap_or("kept")
         ),
-        SunSearch::NotFound { reason } => format!("none: {reason}"),
+        None => format!("none: {}", r.sun.reason),
     }
 }
 

@@ -471,11 +471,7 @@ pub fn run(a: DemoArgs) -> anyhow::Result<()> {
         index.display(),
         run.env,
         c.light,
-        if matches!(c.sun, specmap::envmap::sun::SunSearch::Found(_)) {
-            "found"
-        } else {
-            "not found"
-        },
+        if c.sun.found { "found" } else { "not found" },
         run.renderer,
         run.tradeoff.len(),
         files.len(),

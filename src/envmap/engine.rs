@@ -20,7 +20,10 @@
 //!
 //! Sun pixels get the sun's SPD at the luminance their own conversion would have had.
 
-use crate::colorimetry::{delta_e_2000, Cmfs, Lab, Xyz};
+use crate::colorimetry::{Cmfs, Xyz};
+use crate::envmap::metric::RgbMetric;
+#[cfg(test)]
+use crate::envmap::metric::ROUND_TRIP_ZERO;
 use crate::error::{Error, Result};
 use crate::fit::{Fit, Upsampler, CONDITION_LIMIT};
 use crate::illuminant;
@@ -80,22 +83,34 @@ pub enum SunSource<'a> {
     DaylightFit([f64; 3]),
 }
 
+/// Whether an XYZ colour is daylight-coloured: its xy within [`SKY_LOCUS_TOLERANCE`] of the
+/// daylight locus, between the x of [`SKY_LOCUS_X`].
+pub fn daylight_coloured(xyz: &Vector3<f64>) -> bool {
+    let sum = xyz.sum();
+    if !(xyz[1] > 0.0 && sum > 0.0) {
+        return false;
+    }
+    let (x, y) = (xyz[0] / sum, xyz[1] / sum);
+    (SKY_LOCUS_X.0..=SKY_LOCUS_X.1).contains(&x)
+        && (y - illuminant::daylight_locus_y(x)).abs() <= SKY_LOCUS_TOLERANCE
+}
+
 /// A pixel's sky test: within this distance in CIE 1931 y of the daylight locus...
 pub const SKY_LOCUS_TOLERANCE: f64 = 0.02;
 /// ...and between these x (25000 K and, extended below CIE's 4000 K, about 3000 K).
 pub const SKY_LOCUS_X: (f64, f64) = (0.2000, 0.4400);
 /// The smooth modulation's variable: x = (lambda - centre) / half width.
-const SMOOTH_CENTRE_NM: f64 = 580.0;
-const SMOOTH_HALF_WIDTH_NM: f64 = 200.0;
+pub(crate) const SMOOTH_CENTRE_NM: f64 = 580.0;
+pub(crate) const SMOOTH_HALF_WIDTH_NM: f64 = 200.0;
 /// A spectrum is "negative" when some value is below -this x its peak.
-const NEGATIVE_TOLERANCE: f64 = 1e-4;
+pub(crate) const NEGATIVE_TOLERANCE: f64 = 1e-4;
 
 /// A main light is daylight when its least-squares fit by S0, S1, S2 leaves at most this relative
 /// RMS residual (CIE D illuminants: ~0; FL2: 0.4; A: 0.1; see the tests).
 pub const DAYLIGHT_RESIDUAL: f64 = 0.03;
 
 /// The relative RMS residual of `light`'s least-squares fit by the daylight basis.
-fn daylight_residual(light: &Spectrum, d: &Basis3) -> f64 {
+pub(crate) fn daylight_residual(light: &Spectrum, d: &Basis3) -> f64 {
     let l = light.values();
     let b = |j: usize, i: usize| d.spectra[j][i] as f64;
     let g = Matrix3::from_fn(|p, q| (0..l.len()).map(|i| b(p, i) * b(q, i)).sum::<f64>());
@@ -112,12 +127,12 @@ fn daylight_residual(light: &Spectrum, d: &Basis3) -> f64 {
     (res / norm).sqrt()
 }
 
-/// Relative difference between a pixel and its round trip below which the CIEDE2000 is taken
-/// as 0 (rounding, not a colour difference).
-const ROUND_TRIP_ZERO: f64 = 1e-12;
-
 /// Writes `sum a_j B_j` into `out` and returns whether it is negative somewhere.
-fn write_combination(spectra: &[Vec<f32>; 3], a: &Vector3<f64>, out: &mut [f32]) -> bool {
+pub(crate) fn write_combination(
+    spectra: &[Vec<f32>; 3],
+    a: &Vector3<f64>,
+    out: &mut [f32],
+) -> bool {
     let (a0, a1, a2) = (a[0] as f32, a[1] as f32, a[2] as f32);
     // Zipped slices (no bounds checks) and a separate min/max pass: both vectorise.
     for (((o, &b0), &b1), &b2) in out
@@ -135,7 +150,7 @@ fn write_combination(spectra: &[Vec<f32>; 3], a: &Vector3<f64>, out: &mut [f32])
 }
 
 /// The smallest value of `sum a_j B_j` relative to its peak (negative: how negative).
-fn relative_min(spectra: &[Vec<f32>; 3], a: &Vector3<f64>) -> f64 {
+pub(crate) fn relative_min(spectra: &[Vec<f32>; 3], a: &Vector3<f64>) -> f64 {
     let (mut lo, mut hi) = (0f64, 0f64);
     for ((&b0, &b1), &b2) in spectra[0].iter().zip(&spectra[1]).zip(&spectra[2]) {
         let v = a[0] * b0 as f64 + a[1] * b1 as f64 + a[2] * b2 as f64;
@@ -151,18 +166,18 @@ fn relative_min(spectra: &[Vec<f32>; 3], a: &Vector3<f64>) -> f64 {
 
 /// Three spectra on the output grid and the 3x3 maps between their coefficients and RGB.
 #[derive(Debug, Clone)]
-struct Basis3 {
-    spectra: [Vec<f32>; 3],
-    y: [f64; 3],
+pub(crate) struct Basis3 {
+    pub(crate) spectra: [Vec<f32>; 3],
+    pub(crate) y: [f64; 3],
     /// Columns: linear RGB of each spectrum.
-    rgb: Matrix3<f64>,
+    pub(crate) rgb: Matrix3<f64>,
     /// rgb^-1: coefficients of a (true) RGB.
-    inv: Matrix3<f64>,
-    peak: [f64; 3],
+    pub(crate) inv: Matrix3<f64>,
+    pub(crate) peak: [f64; 3],
 }
 
 impl Basis3 {
-    fn new(spectra: [Spectrum; 3], y: [f64; 3], rgb: Matrix3<f64>) -> Option<Basis3> {
+    pub(crate) fn new(spectra: [Spectrum; 3], y: [f64; 3], rgb: Matrix3<f64>) -> Option<Basis3> {
         let sv = rgb.singular_values();
         let (hi, lo) = (sv.max(), sv.min());
         if !(lo > 0.0 && hi / lo <= CONDITION_LIMIT) {
@@ -182,15 +197,15 @@ impl Basis3 {
     }
 
     /// Writes `sum a_j B_j` into `out` and returns whether it is negative somewhere.
-    fn write(&self, a: &Vector3<f64>, out: &mut [f32]) -> bool {
+    pub(crate) fn write(&self, a: &Vector3<f64>, out: &mut [f32]) -> bool {
         write_combination(&self.spectra, a, out)
     }
 
-    fn luminance(&self, a: &Vector3<f64>) -> f64 {
+    pub(crate) fn luminance(&self, a: &Vector3<f64>) -> f64 {
         (0..3).map(|j| a[j] * self.y[j]).sum()
     }
 
-    fn bound(&self, a: &Vector3<f64>) -> f64 {
+    pub(crate) fn bound(&self, a: &Vector3<f64>) -> f64 {
         (0..3).map(|j| a[j].abs() * self.peak[j]).sum()
     }
 }
@@ -219,12 +234,7 @@ pub struct Engine {
     daylight: Option<Basis3>,
     /// The main light times (1, x, x^2) (when the model is smooth and the light can carry it).
     smooth: Option<Basis3>,
-    /// RGB -> luminance row of the space.
-    y_row: [f64; 3],
-    /// RGB -> XYZ (x100, as `RgbSpace::xyz_from_rgb`), computed once: the round trip needs it
-    /// per pixel.
-    to_xyz: nalgebra::Matrix3<f64>,
-    white: Xyz,
+    metric: RgbMetric,
 }
 
 /// What one pixel became.
@@ -247,6 +257,12 @@ pub enum Took {
     Daylight,
     Smooth,
     Colorchecker,
+    /// The carrier times a non-negative Bernstein combination, exact in RGB.
+    Nonneg,
+    /// The nearest non-negative spectrum: the colour is not one the carrier can light.
+    Nearest,
+    /// A clipped lamp pixel: the lamp's SPD at the pixel's luminance.
+    Fixed,
 }
 
 impl Engine {
@@ -382,7 +398,6 @@ impl Engine {
                 Some((s, d.rgb * a))
             }
         };
-        let m = space.to_xyz_matrix();
         let peak = |b: &[f32]| b.iter().fold(0f32, |m, &v| m.max(v.abs())) as f64;
         Ok(Engine {
             grid,
@@ -401,14 +416,17 @@ impl Engine {
                 None
             },
             smooth,
-            y_row: [m[(1, 0)], m[(1, 1)], m[(1, 2)]],
-            to_xyz: m * 100.0,
-            white: space.xyz_from_rgb([1.0, 1.0, 1.0]),
+            metric: RgbMetric::new(&space),
         })
     }
 
     pub fn grid(&self) -> &WavelengthGrid {
         &self.grid
+    }
+
+    /// How pixels are measured (luminance, round trip).
+    pub fn metric(&self) -> &RgbMetric {
+        &self.metric
     }
 
     pub fn model(&self) -> Model {
@@ -453,9 +471,7 @@ impl Engine {
 
     /// Luminance of a linear RGB pixel in the fit's space.
     pub fn luminance(&self, rgb: [f32; 3]) -> f64 {
-        self.y_row[0] * rgb[0] as f64
-            + self.y_row[1] * rgb[1] as f64
-            + self.y_row[2] * rgb[2] as f64
+        self.metric.luminance(rgb)
     }
 
     /// The ColorChecker-basis coefficients of a pixel under the white premise.
@@ -488,14 +504,7 @@ impl Engine {
     /// Whether a true RGB is daylight-coloured: its xy within [`SKY_LOCUS_TOLERANCE`] of the
     /// daylight locus, between the x of [`SKY_LOCUS_X`].
     pub fn is_daylight_coloured(&self, r: &Vector3<f64>) -> bool {
-        let xyz = self.to_xyz * r;
-        let sum = xyz.sum();
-        if !(xyz[1] > 0.0 && sum > 0.0) {
-            return false;
-        }
-        let (x, y) = (xyz[0] / sum, xyz[1] / sum);
-        (SKY_LOCUS_X.0..=SKY_LOCUS_X.1).contains(&x)
-            && (y - illuminant::daylight_locus_y(x)).abs() <= SKY_LOCUS_TOLERANCE
+        daylight_coloured(&self.metric.xyz(r))
     }
 
     /// The basis coefficients of a pixel, and whether it is a sun pixel: `(c_R, c_G, c_B, s)`,
@@ -614,31 +623,14 @@ impl Engine {
         }
     }
 
-    /// CIEDE2000 between an input pixel and its round trip, both scaled so the input has Y = 1
-    /// (the comparison is of colour and relative brightness, whatever the HDR level).
+    /// CIEDE2000 between an input pixel and its round trip (see [`RgbMetric::round_trip_error`]).
     pub fn round_trip_error(&self, rgb: [f32; 3], back: [f64; 3]) -> f64 {
-        let y = self.luminance(rgb);
-        if y.is_nan() || y <= 0.0 {
-            return 0.0;
-        }
-        let input = [rgb[0] as f64 / y, rgb[1] as f64 / y, rgb[2] as f64 / y];
-        let out = back.map(|v| v / y);
-        // A round trip exact to rounding (the exact and faithful modes) is 0, without the cost
-        // of CIEDE2000: at 1e-12 of the pixel's scale its CIEDE2000 would be below 1e-7.
-        let scale = input.iter().fold(1f64, |m, v| m.max(v.abs()));
-        if (0..3).all(|k| (input[k] - out[k]).abs() <= ROUND_TRIP_ZERO * scale) {
-            return 0.0;
-        }
-        self.delta_e(input, out)
+        self.metric.round_trip_error(rgb, back)
     }
 
-    /// CIEDE2000 between two linear RGB colours of the fit's space.
+    #[cfg(test)]
     fn delta_e(&self, a: [f64; 3], b: [f64; 3]) -> f64 {
-        let xyz = |v: [f64; 3]| Xyz((self.to_xyz * nalgebra::Vector3::from(v)).into());
-        delta_e_2000(
-            Lab::from_xyz(xyz(a), self.white),
-            Lab::from_xyz(xyz(b), self.white),
-        )
+        self.metric.delta_e(a, b)
     }
 }
 

@@ -489,7 +489,8 @@ pub fn read_faces(pattern: &str, layer: Option<&str>) -> Result<[RgbImage; 6]> {
 }
 
 /// Sample precision of the written channels.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
 pub enum Precision {
     /// 16-bit half float: finite values up to 65504.
     Half,
@@ -597,6 +598,8 @@ pub struct SpectralLayout {
     /// The zlib level of ZIP and ZIPS (0 stores, 1 fastest, 12 smallest; OpenEXR's default is
     /// [`ZIP_DEFAULT_LEVEL`]). Other compressions ignore it.
     pub zip_level: u8,
+    /// Channels stored as given whatever `ev` is (masks: a 0/1 channel stays 0/1).
+    pub unscaled: Vec<String>,
 }
 
 pub use super::zip::{DEFAULT_LEVEL as ZIP_DEFAULT_LEVEL, MAX_LEVEL as ZIP_MAX_LEVEL};
@@ -673,6 +676,8 @@ pub struct SpectralWriter {
     names: Vec<String>,
     half: bool,
     scale: f32,
+    /// The scale of each channel in file order (1 for the unscaled ones).
+    file_scales: Vec<f32>,
     lines_per_block: usize,
     compression: Compression,
     zip_level: u8,
@@ -701,6 +706,7 @@ impl SpectralWriter {
             ev,
             attributes,
             zip_level,
+            unscaled,
         } = layout;
         if width == 0 || height == 0 {
             return Err(Error::invalid(format!(
@@ -832,6 +838,16 @@ impl SpectralWriter {
             width,
             height,
             per_pixel: names.len(),
+            file_scales: order
+                .iter()
+                .map(|&c| {
+                    if unscaled.contains(&names[c]) {
+                        1.0
+                    } else {
+                        scale
+                    }
+                })
+                .collect(),
             file_order: order,
             names,
             half: precision == Precision::Half,
@@ -1026,7 +1042,9 @@ impl SpectralWriter {
                 }
             }
             if self.scale != 1.0 {
-                planar.iter_mut().for_each(|v| *v *= self.scale);
+                for (line, &s) in planar.chunks_exact_mut(w).zip(&self.file_scales) {
+                    line.iter_mut().for_each(|v| *v *= s);
+                }
             }
             let out_lines = out.chunks_exact_mut(w * bytes_per);
             for (line, dst) in planar.chunks_exact(w).zip(out_lines) {

@@ -9,7 +9,6 @@ use crate::colorimetry::{cct, Cct, Cmfs, Observer, RgbSpace, Xyz};
 use crate::data;
 use crate::envmap::engine::WhitePremise;
 use crate::envmap::layout::EnvMap;
-use crate::envmap::sun::SunSearch;
 use crate::error::Result;
 use crate::spectrum::{Interpolation, Rule, WavelengthGrid};
 
@@ -73,7 +72,8 @@ pub fn bright_regions(map: &EnvMap, space: &RgbSpace) -> [f64; 3] {
 }
 
 /// Chooses the main light of `map` (linear RGB in `space`).
-pub fn choose(map: &EnvMap, sun: &SunSearch, space: &RgbSpace) -> Result<LightChoice> {
+/// `sun`: the energy share and elevation of the map's sun, if it has one.
+pub fn choose(map: &EnvMap, sun: Option<(f64, f64)>, space: &RgbSpace) -> Result<LightChoice> {
     let rgb = bright_regions(map, space);
     let xyz = space.xyz_from_rgb(rgb);
     let bright_xy = xyz.xy();
@@ -82,15 +82,15 @@ pub fn choose(map: &EnvMap, sun: &SunSearch, space: &RgbSpace) -> Result<LightCh
         Some(k) => format!("CCT {k:.0} K, Duv {:+.4}", c.duv),
         None => format!("far from the Planckian locus, Duv {:+.3}", c.duv),
     };
-    if let Some(s) = sun.sun() {
+    if let Some((share, elevation)) = sun {
         return Ok(LightChoice {
             light: "D65".into(),
             exterior: true,
             reason: format!(
                 "exterior: a sun carries {:.0}% of the energy ({:.1} degrees above the horizon), \
                  so the main light is daylight, D65 as in the paper",
-                100.0 * s.energy_share,
-                s.elevation_deg
+                100.0 * share,
+                elevation
             ),
             bright_xy,
             bright_cct,
@@ -245,7 +245,8 @@ mod tests {
             let xy = white_xy(lamp).unwrap();
             let map = room(rgb_of_xy(xy, &RgbSpace::SRGB), 20.0);
             let sun = find_sun(&map, &RgbSpace::SRGB, &SunSettings::default());
-            let c = choose(&map, &sun, &RgbSpace::SRGB).unwrap();
+            let sun = sun.sun().map(|s| (s.energy_share, s.elevation_deg));
+            let c = choose(&map, sun, &RgbSpace::SRGB).unwrap();
             // Out-of-gamut lamp colours (LPS) are clipped to the sRGB gamut by rgb_of_xy, so
             // only require the nearest lamp to be the one painted, or a lamp of its family.
             assert!(!c.exterior, "{lamp}: {c:?}");
@@ -257,7 +258,8 @@ mod tests {
     fn daylight_rooms_and_suns_are_exteriors() {
         let map = room(rgb_of_xy(white_xy("D65").unwrap(), &RgbSpace::SRGB), 5.0);
         let sun = find_sun(&map, &RgbSpace::SRGB, &SunSettings::default());
-        let c = choose(&map, &sun, &RgbSpace::SRGB).unwrap();
+        let sun = sun.sun().map(|s| (s.energy_share, s.elevation_deg));
+        let c = choose(&map, sun, &RgbSpace::SRGB).unwrap();
         assert!(c.exterior && c.light == "D65", "{c:?}");
         assert!(c.reason.contains("daylight-coloured"));
     }

@@ -1,13 +1,19 @@
 //! Environment maps: layouts and directions, EXR and HDR I/O, sun detection, and the conversion
 //! of RGB maps to spectral ones.
 
+pub mod carriers;
 pub mod convert;
 pub mod engine;
 pub mod exrio;
+pub mod input;
 pub mod layout;
 pub mod light;
+pub mod metric;
+pub mod plan;
 pub mod roundtrip;
+pub mod scene;
 pub mod sun;
+pub mod write;
 pub mod zip;
 
 /// A linear RGB image in memory, row-major from the top-left pixel, f32 per channel.

@@ -242,7 +242,7 @@ fn convert_facts(o: &mut String, c: &Converted) {
         "fit",
         format!(
             "{} mode, weights {:.4} {:.4} {:.4}, condition {:.3}{}",
-            mode_name(r.mode),
+            r.mode,
             r.weights[0],
             r.weights[1],
             r.weights[2],

@@ -1,0 +1,172 @@
+//! The conversion's first stage: read the map (one file or six face files), make its values
+//! usable (NaN, infinities and negatives counted), and resample it to the output layout.
+
+use crate::colorimetry::RgbSpace;
+use crate::envmap::convert::{ConvertOptions, MAX_INPUT};
+use crate::envmap::exrio::{self, EnvmapAttr};
+use crate::envmap::layout::{detect, EnvMap, Layout};
+use crate::error::{Error, Result};
+use std::path::Path;
+use std::time::Instant;
+
+/// Pixels changed to make the input usable.
+#[derive(Debug, Clone, Copy, Default, serde::Serialize)]
+pub struct Sanitized {
+    /// NaN or infinite channel values set to 0.
+    pub non_finite: usize,
+    /// Negative channel values (lossy compression leaves small ones) set to 0.
+    pub negative: usize,
+    /// Negative channel values kept: under the D65 premise a pixel of positive luminance with a
+    /// negative channel is a colour outside the RGB gamut (sodium light), which the spectrum can
+    /// carry.
+    pub negative_kept: usize,
+}
+
+/// A pixel index and its RGB before negatives were clamped.
+pub type OutOfGamut = (usize, [f32; 3]);
+
+/// The map as read, sanitised and laid out for the output.
+#[derive(Debug, Clone)]
+pub struct Input {
+    pub map: EnvMap,
+    pub description: String,
+    pub layout: Layout,
+    pub size: [usize; 2],
+    pub sanitized: Sanitized,
+    /// Out-of-gamut pixels as they were (restored under the D65 premise when not resampled).
+    pub out_of_gamut: Vec<OutOfGamut>,
+    /// The map was resampled (layout, size or orientation changed).
+    pub resampled: bool,
+    pub seconds: f64,
+}
+
+impl Input {
+    /// Restores the out-of-gamut pixels (the D65 premise keeps them); a note when resampling
+    /// already set them to 0.
+    pub fn keep_out_of_gamut(&mut self) -> Option<String> {
+        if self.out_of_gamut.is_empty() {
+            return None;
+        }
+        if self.resampled {
+            return Some(format!(
+                "{} out-of-gamut pixels (negative channels) were set to 0 before resampling",
+                self.out_of_gamut.len()
+            ));
+        }
+        for &(i, p) in &self.out_of_gamut {
+            let n = p.iter().filter(|&&v| v < 0.0).count();
+            self.sanitized.negative -= n;
+            self.sanitized.negative_kept += n;
+            self.map.image.pixels[i] = p;
+        }
+        None
+    }
+}
+
+/// Reads, sanitises and lays out `input` for `opts`.
+pub fn read(input: &str, opts: &ConvertOptions) -> Result<Input> {
+    let t0 = Instant::now();
+    let (mut map, description) = read_input(input, opts)?;
+    let (sanitized, out_of_gamut) = sanitize(&mut map, opts.strict, input, &opts.space)?;
+    let layout = map.layout;
+    let size = [map.image.width, map.image.height];
+    let out_layout = opts.out_layout.unwrap_or(layout);
+    let in_size = map.face_size();
+    let face = opts.size.unwrap_or(match (layout, out_layout) {
+        (a, b) if a == b => in_size,
+        // Matched pixel density: a lat-long 4N wide has about the pixels per radian of faces N.
+        (Layout::LatLong, _) => (in_size / 2).max(1),
+        (_, Layout::LatLong) => in_size * 2,
+        _ => in_size,
+    });
+    if face == 0 {
+        return Err(Error::invalid("--size must be at least 1"));
+    }
+    let resampled = out_layout != layout || face != in_size || !opts.orientation.is_identity();
+    if resampled {
+        map = map.resample_oriented(out_layout, face, &opts.orientation);
+    }
+    Ok(Input {
+        map,
+        description,
+        layout,
+        size,
+        sanitized,
+        out_of_gamut,
+        resampled,
+        seconds: t0.elapsed().as_secs_f64(),
+    })
+}
+
+/// Reads the input map (one file or six face files) with its layout.
+fn read_input(input: &str, opts: &ConvertOptions) -> Result<(EnvMap, String)> {
+    if opts.faces || input.contains("{face}") {
+        let faces = exrio::read_faces(input, opts.layer.as_deref())?;
+        let map = EnvMap::from_faces(faces)?;
+        return Ok((map, format!("six face files {input}")));
+    }
+    let img = exrio::read_rgb(Path::new(input), opts.layer.as_deref())?;
+    let attr = img.envmap.map(|a| match a {
+        EnvmapAttr::LatLong => Layout::LatLong,
+        EnvmapAttr::Cube => Layout::Cube,
+    });
+    let layout = match opts.in_layout {
+        Some(l) => l,
+        None => detect(img.image.width, img.image.height, attr)
+            .map_err(|e| Error::invalid(format!("{input}: {e}")))?,
+    };
+    let map =
+        EnvMap::new(layout, img.image).map_err(|e| Error::invalid(format!("{input}: {e}")))?;
+    Ok((map, img.description))
+}
+
+/// Sets NaN/infinite values to 0 (or refuses them) and clamps negatives, counting both. Pixels of
+/// positive luminance with a negative channel (out-of-gamut colours) are returned as they were,
+/// to be restored under the D65 premise.
+fn sanitize(
+    map: &mut EnvMap,
+    strict: bool,
+    input: &str,
+    space: &RgbSpace,
+) -> Result<(Sanitized, Vec<OutOfGamut>)> {
+    let mut s = Sanitized::default();
+    let m = space.to_xyz_matrix();
+    let mut out_of_gamut = Vec::new();
+    let width = map.image.width;
+    for (i, p) in map.image.pixels.iter_mut().enumerate() {
+        if p.iter().all(|v| v.is_finite()) && p.iter().any(|&v| v < 0.0) {
+            let y = (0..3).map(|k| m[(1, k)] * p[k] as f64).sum::<f64>();
+            if y > 0.0 {
+                out_of_gamut.push((i, *p));
+            }
+        }
+        for (c, v) in p.iter_mut().enumerate() {
+            if !v.is_finite() {
+                if strict {
+                    return Err(Error::invalid(format!(
+                        "{input}: pixel ({}, {}) channel {} is {v} (--strict refuses NaN and \
+                         infinite values)",
+                        i % width,
+                        i / width,
+                        ["R", "G", "B"][c]
+                    )));
+                }
+                *v = 0.0;
+                s.non_finite += 1;
+            } else if (*v as f64).abs() > MAX_INPUT {
+                return Err(Error::invalid(format!(
+                    "{input}: pixel ({}, {}) channel {} is {v:e}, beyond {MAX_INPUT:e}: no \
+                     radiance map holds that (the sun is about 1e9 cd/m^2); a corrupt or \
+                     mis-scaled file? Scale it down first",
+                    i % width,
+                    i / width,
+                    ["R", "G", "B"][c]
+                )));
+            } else if *v < 0.0 {
+                *v = 0.0;
+                s.negative += 1;
+            }
+        }
+    }
+    Ok((s, out_of_gamut))
+}

@@ -1,0 +1,226 @@
+//! The analysis grid: a lat-long view of a map in true (D65-referenced) linear RGB, with each
+//! cell's luminance, solid angle and direction.
+//!
+//! Any layout is analysed the same way: a lat-long map up to [`MAX_ANALYSIS_WIDTH`] wide is used
+//! cell for pixel; anything else (cube-like layouts, larger maps) is resampled to a lat-long of
+//! matched density, energy-preserving, and each output pixel finds its cell by direction.
+
+use crate::colorimetry::RgbSpace;
+use crate::envmap::layout::{EnvMap, Layout};
+use nalgebra::{Matrix3, Vector3};
+use std::f64::consts::PI;
+
+/// The widest lat-long analysed at its own resolution (wider maps are analysed at this width:
+/// every light still covers whole cells, and the analysis stays in a few tens of MB).
+pub const MAX_ANALYSIS_WIDTH: usize = 2048;
+
+/// The lat-long cells of a map, in true linear RGB.
+#[derive(Debug, Clone)]
+pub struct Cells {
+    pub width: usize,
+    pub height: usize,
+    /// True (D65-referenced) linear RGB of each cell, row-major from the top-left.
+    pub rgb: Vec<[f32; 3]>,
+    /// Luminance (>= 0; negative luminance counts as 0).
+    pub y: Vec<f32>,
+    /// RGB -> XYZ (Y = luminance).
+    pub to_xyz: Matrix3<f64>,
+    /// The cells are the map's own pixels (a lat-long at most MAX_ANALYSIS_WIDTH wide).
+    pub identity: bool,
+    /// What each channel was multiplied by (the white premise).
+    pub balance: [f64; 3],
+}
+
+impl Cells {
+    /// The cells of `map`, each pixel multiplied by `balance` (the white premise: the main
+    /// light's RGB when the map is white-balanced to it, else 1) to make it D65-referenced.
+    pub fn new(map: &EnvMap, space: &RgbSpace, balance: [f64; 3]) -> Cells {
+        let identity = map.layout == Layout::LatLong && map.image.width <= MAX_ANALYSIS_WIDTH;
+        let resampled;
+        let src = if identity {
+            map
+        } else {
+            let height = (map.face_size() * 2).clamp(2, MAX_ANALYSIS_WIDTH / 2);
+            resampled = map.resample(Layout::LatLong, height);
+            &resampled
+        };
+        let to_xyz = space.to_xyz_matrix();
+        let row = [to_xyz[(1, 0)], to_xyz[(1, 1)], to_xyz[(1, 2)]];
+        let rgb: Vec<[f32; 3]> = src
+            .image
+            .pixels
+            .iter()
+            .map(|p| std::array::from_fn(|k| (p[k] as f64 * balance[k]) as f32))
+            .collect();
+        let y = rgb
+            .iter()
+            .map(|p| {
+                let l: f64 = (0..3).map(|k| row[k] * p[k] as f64).sum();
+                if l.is_finite() {
+                    l.max(0.0) as f32
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        Cells {
+            width: src.image.width,
+            height: src.image.height,
+            rgb,
+            y,
+            to_xyz,
+            identity,
+            balance,
+        }
+    }
+
+    pub fn len(&self) -> usize {
+        self.rgb.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.rgb.is_empty()
+    }
+
+    /// The solid angle of a cell (the same for every cell of a row).
+    pub fn omega(&self, i: usize) -> f64 {
+        let y = i / self.width;
+        let t0 = PI * y as f64 / self.height as f64;
+        let t1 = PI * (y + 1) as f64 / self.height as f64;
+        2.0 * PI / self.width as f64 * (t0.cos() - t1.cos())
+    }
+
+    /// The unit direction of a cell's centre (OpenEXR's lat-long: Y up, centre column +Z).
+    pub fn direction(&self, i: usize) -> [f64; 3] {
+        let (x, y) = (i % self.width, i / self.width);
+        let u = (x as f64 + 0.5) / self.width as f64;
+        let v = (y as f64 + 0.5) / self.height as f64;
+        let lat = -PI * (v - 0.5);
+        let lon = -2.0 * PI * (u - 0.5);
+        [lon.sin() * lat.cos(), lat.sin(), lon.cos() * lat.cos()]
+    }
+
+    /// The cell that holds direction `d` (unit or not).
+    pub fn cell_of(&self, d: [f64; 3]) -> usize {
+        let n = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        if !(n > 0.0 && n.is_finite()) {
+            return 0;
+        }
+        let lon = d[0].atan2(d[2]);
+        let lat = (d[1] / n).clamp(-1.0, 1.0).asin();
+        let u = 0.5 - lon / (2.0 * PI);
+        let v = 0.5 - lat / PI;
+        let x = ((u * self.width as f64) as usize).min(self.width - 1);
+        let y = ((v * self.height as f64) as usize).min(self.height - 1);
+        y * self.width + x
+    }
+
+    /// The cell of each pixel of `map` (the map the cells were made from); None for the unused
+    /// cells of a cross.
+    pub fn cell_of_pixel(&self, map: &EnvMap, x: usize, y: usize) -> Option<usize> {
+        if self.identity {
+            return Some(y * self.width + x);
+        }
+        map.direction(x, y).map(|d| self.cell_of(d))
+    }
+
+    /// XYZ of a cell's true RGB.
+    pub fn xyz(&self, i: usize) -> Vector3<f64> {
+        let p = self.rgb[i];
+        self.to_xyz * Vector3::new(p[0] as f64, p[1] as f64, p[2] as f64)
+    }
+
+    /// The cells next to cell `i` (8-neighbourhood), wrapping in longitude; across a pole the
+    /// neighbours are the cells half a turn away on the same row.
+    pub fn neighbours(&self, i: usize) -> impl Iterator<Item = usize> + '_ {
+        let (w, h) = (self.width as isize, self.height as isize);
+        let (x, y) = ((i % self.width) as isize, (i / self.width) as isize);
+        [
+            (-1, -1),
+            (0, -1),
+            (1, -1),
+            (-1, 0),
+            (1, 0),
+            (-1, 1),
+            (0, 1),
+            (1, 1),
+        ]
+        .into_iter()
+        .map(move |(dx, dy)| {
+            let (mut nx, mut ny) = (x + dx, y + dy);
+            if ny < 0 || ny >= h {
+                ny = ny.clamp(0, h - 1);
+                nx += w / 2;
+            }
+            (ny * w + nx.rem_euclid(w)) as usize
+        })
+        .filter(move |&j| j != i)
+    }
+}
+
+/// The solid-angle-weighted quantile `q` (0..1) of `values` over the cells.
+pub fn weighted_quantile(cells: &Cells, values: &[f32], q: f64) -> f64 {
+    // Cells of a row share their solid angle: sort (value, row) pairs once.
+    let mut v: Vec<(f32, f64)> = values
+        .iter()
+        .enumerate()
+        .map(|(i, &x)| (x, cells.omega(i)))
+        .collect();
+    v.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let total: f64 = v.iter().map(|p| p.1).sum();
+    let mut acc = 0.0;
+    for (x, w) in &v {
+        acc += w;
+        if acc >= q * total {
+            return *x as f64;
+        }
+    }
+    v.last().map_or(0.0, |p| p.0 as f64)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::envmap::RgbImage;
+
+    #[test]
+    fn cells_are_the_maps_directions_and_solid_angles() {
+        let map = EnvMap::new(Layout::LatLong, RgbImage::new(64, 32)).unwrap();
+        let c = Cells::new(&map, &RgbSpace::SRGB, [1.0; 3]);
+        assert!(c.identity);
+        let total: f64 = (0..c.len()).map(|i| c.omega(i)).sum();
+        assert!((total - 4.0 * PI).abs() < 1e-9);
+        for i in [0, 100, 1000, 2047] {
+            let d = map.direction(i % 64, i / 64).unwrap();
+            let e = c.direction(i);
+            assert!((0..3).all(|k| (d[k] - e[k]).abs() < 1e-12), "{d:?} {e:?}");
+            assert_eq!(c.cell_of(e), i);
+            assert!((c.omega(i) - map.solid_angle(i % 64, i / 64)).abs() < 1e-15);
+        }
+    }
+
+    #[test]
+    fn a_cube_is_analysed_through_a_latlong_of_its_density() {
+        let mut img = RgbImage::new(8, 48);
+        img.pixels.iter_mut().for_each(|p| *p = [2.0, 2.0, 2.0]);
+        let map = EnvMap::new(Layout::Cube, img).unwrap();
+        let c = Cells::new(&map, &RgbSpace::SRGB, [1.0; 3]);
+        assert!(!c.identity);
+        assert_eq!((c.width, c.height), (32, 16));
+        let energy: f64 = (0..c.len()).map(|i| c.y[i] as f64 * c.omega(i)).sum();
+        assert!((energy / (8.0 * PI) - 1.0).abs() < 1e-3, "{energy}");
+        // Each cube pixel finds the cell of its direction.
+        let d = map.direction(3, 20).unwrap();
+        assert_eq!(c.cell_of_pixel(&map, 3, 20), Some(c.cell_of(d)));
+    }
+
+    #[test]
+    fn neighbours_wrap_in_longitude_and_cross_the_poles() {
+        let map = EnvMap::new(Layout::LatLong, RgbImage::new(8, 4)).unwrap();
+        let c = Cells::new(&map, &RgbSpace::SRGB, [1.0; 3]);
+        let n: Vec<usize> = c.neighbours(8).collect(); // (0, 1)
+        assert!(n.contains(&15) && n.contains(&7) && n.contains(&23));
+        let top: Vec<usize> = c.neighbours(1).collect(); // (1, 0): across the pole, x + 4
+        assert!(top.contains(&5), "{top:?}");
+    }
+}

@@ -1,0 +1,689 @@
+//! What each emitter is: the sun, a sky or window, a lamp of a family, or a bright reflector;
+//! and which dim daylight-coloured regions are sky or windows.
+//!
+//! The rules, each with its reason in the report:
+//! - **sun**: the brightest emitter, if its core is compact (at most the sun settings' solid
+//!   angle), at least [`SUN_CONTRAST`] times the median luminance, no lower than
+//!   [`SUN_MIN_ELEVATION_DEG`], of a daylight or Planckian colour (|Duv| <= [`SUN_MAX_DUV`]),
+//!   unique (no other emitter's peak within [`SUN_UNIQUE`] of its own, reflections of it
+//!   aside), and seen with daylight: a daylight sky or window in the map, or (no sky) at least the
+//!   settings' share of the energy in a daylight colour. A red sun on the horizon is the sun; four
+//!   similar lamps are not; a sodium lamp at night has no daylight around it.
+//! - **sky / window**: an emitter of daylight colour (CIE 1931 xy within 0.02 of the daylight
+//!   locus) at least [`WINDOW_MIN_K`] and [`WINDOW_MIN_SR`]; or a dim daylight-coloured region of
+//!   the upper hemisphere at least [`SKY_MIN_K`] and [`SKY_MIN_SR`] whose colour no lamp explains
+//!   (farther than [`EXPLAINED_UV`] from every lamp's white and the mixes of two) and that is not a
+//!   wall lit by a window ([`LIT_BY_WINDOW`] times dimmer and of its colour). It is the sky when it
+//!   reaches [`SKY_TOP_DEG`] or covers [`SKY_LARGE_SR`], otherwise a window; all sky regions are
+//!   one light.
+//!   With a sky in view, every bright daylight-coloured patch above the horizon (sky between
+//!   leaves, through a gap in the clouds) is part of it.
+//! - **lamp**: any other emitter, matched to a lamp family ([`super::families`]). With daylight
+//!   about, an emitter that is not [`DAYLIGHT_LAMP_CONTRAST`] times brighter than the sky is a
+//!   sunlit surface when it lies below the horizon or its colour matches no lamp (farther than
+//!   [`LAMP_MATCH_UV`]), and one below the horizon of the sun's colour is a reflection of the
+//!   sun; an emitter candidate at most [`LIT_BY_LAMP`] of a lamp's luminance and within
+//!   [`LIT_COLOUR_UV`] of its colour is a surface it lights (a lamp's radiance does not fall with
+//!   distance, a lit wall's is orders of magnitude below it): reflectors, all.
+
+use super::cells::Cells;
+use super::emitters::{Emitter, Levels};
+use super::families::{match_lamp, LampMatch};
+use super::regions::{components, RegionStats};
+use super::{Light, LightKind, LightSpd, SceneSettings};
+use crate::colorimetry::{cct, Xyz};
+use crate::envmap::engine::daylight_coloured;
+use crate::error::Result;
+use nalgebra::Vector3;
+
+pub const SUN_CONTRAST: f64 = 100.0;
+pub const SUN_MIN_ELEVATION_DEG: f64 = -1.0;
+pub const SUN_MAX_DUV: f64 = 0.02;
+pub const SUN_UNIQUE: f64 = 0.1;
+pub const WINDOW_MIN_K: f64 = 5000.0;
+pub const WINDOW_MIN_SR: f64 = 0.002;
+pub const SKY_MIN_K: f64 = 4000.0;
+pub const SKY_MIN_SR: f64 = 0.02;
+pub const EXPLAINED_UV: f64 = 0.006;
+pub const LIT_BY_WINDOW: f64 = 20.0;
+pub const SKY_TOP_DEG: f64 = 60.0;
+pub const SKY_LARGE_SR: f64 = 1.0;
+pub const LAMP_MATCH_UV: f64 = 0.01;
+pub const DAYLIGHT_LAMP_CONTRAST: f64 = 10.0;
+/// An emitter candidate this much dimmer than a lamp, and near its colour, is a surface it lights.
+pub const LIT_BY_LAMP: f64 = 0.05;
+pub const LIT_COLOUR_UV: f64 = 0.05;
+/// Emitters holding less of the energy than this are left to the reflectors (glints, noise).
+pub const MIN_LIGHT_SHARE: f64 = 1e-4;
+/// At most this many emitters are classified (the most energetic).
+pub const MAX_EMITTERS: usize = 256;
+
+/// A colour and where it lies.
+#[derive(Debug, Clone, Copy)]
+pub struct Colour {
+    /// XYZ with Y = 1.
+    pub xyz: Vector3<f64>,
+    pub xy: [f64; 2],
+    pub uv: [f64; 2],
+    pub cct_k: Option<f64>,
+    pub duv: f64,
+}
+
+impl Colour {
+    pub fn of(xyz: Vector3<f64>) -> Result<Colour> {
+        let xyz = if xyz[1] > 0.0 { xyz / xyz[1] } else { xyz };
+        let x = Xyz::new(xyz[0], xyz[1], xyz[2]);
+        let c = cct(x)?;
+        Ok(Colour {
+            xyz,
+            xy: x.xy(),
+            uv: x.uv1960(),
+            cct_k: c.kelvin,
+            duv: c.duv,
+        })
+    }
+
+    fn daylight(&self) -> bool {
+        daylight_coloured(&self.xyz)
+    }
+
+    fn uv_distance(&self, o: &Colour) -> f64 {
+        (self.uv[0] - o.uv[0]).hypot(self.uv[1] - o.uv[1])
+    }
+
+    fn describe(&self) -> String {
+        match self.cct_k {
+            Some(k) => format!("CCT {k:.0} K, Duv {:+.4}", self.duv),
+            None => format!(
+                "xy {:.3} {:.3}, far from the Planckian locus",
+                self.xy[0], self.xy[1]
+            ),
+        }
+    }
+}
+
+/// The lights found, and the bright regions that are not lights.
+#[derive(Debug, Clone, Default)]
+pub struct Classified {
+    pub lights: Vec<Light>,
+    pub bright_reflectors: Vec<String>,
+}
+
+/// An emitter with its colour.
+struct Candidate {
+    e: Emitter,
+    colour: Colour,
+}
+
+/// Classifies the emitters of a scene (brightest peak first) and finds its dim skies: the
+/// daylight first (windows, sky, the sun seen with them), then the lamps.
+pub fn classify(
+    cells: &Cells,
+    levels: &Levels,
+    emitters: Vec<Emitter>,
+    settings: &SceneSettings,
+) -> Result<Classified> {
+    let candidates = candidates_of(levels, emitters)?;
+    let mut taken = vec![false; candidates.len()];
+    let mut daylight: Vec<(usize, LightKind)> = (0..candidates.len())
+        .filter(|&k| is_window(&candidates[k]))
+        .map(|k| (k, kind_of(&candidates[k].e.stats)))
+        .collect();
+    let lamp_whites: Vec<Colour> = (0..candidates.len())
+        .filter(|k| !daylight.iter().any(|d| d.0 == *k))
+        .map(|k| candidates[k].colour)
+        .collect();
+    let window_colours: Vec<(Colour, f64)> = daylight
+        .iter()
+        .map(|&(k, _)| (candidates[k].colour, candidates[k].e.stats.mean_xyz[1]))
+        .collect();
+    let dim = dim_skies(cells, &candidates, &lamp_whites, &window_colours)?;
+    let sun = sun_of(
+        &candidates,
+        levels,
+        !daylight.is_empty() || !dim.is_empty(),
+        settings,
+    );
+    let mut out = Classified::default();
+    let sun_index = sun.as_ref().ok().copied();
+    if let Some(k) = sun_index {
+        taken[k] = true;
+        daylight.retain(|d| d.0 != k);
+        out.lights
+            .push(sun_light(cells, levels, &candidates[k], settings)?);
+    }
+    let mut sky_cells = daylight_lights(cells, levels, &candidates, &daylight, &dim, &mut out)?;
+    for &(k, _) in &daylight {
+        taken[k] = true;
+    }
+    let context = Context {
+        daylight: !daylight.is_empty() || !dim.is_empty() || sun_index.is_some(),
+        daylight_level: daylight
+            .iter()
+            .map(|&(k, _)| candidates[k].e.stats.mean_xyz[1])
+            .chain(dim.iter().map(|d| d.stats.mean_xyz[1]))
+            .fold(0f64, f64::max),
+        sun: sun_index.map(|k| candidates[k].colour),
+        sky: !sky_cells.is_empty(),
+    };
+    let free: Vec<&Candidate> = (0..candidates.len())
+        .filter(|&k| !taken[k])
+        .map(|k| &candidates[k])
+        .collect();
+    lamp_lights(
+        cells,
+        levels,
+        &free,
+        &context,
+        settings,
+        &mut sky_cells,
+        &mut out,
+    )?;
+    if !sky_cells.is_empty() {
+        sky_cells.sort_unstable();
+        let light = daylight_light(
+            cells,
+            levels,
+            sky_cells,
+            LightKind::Sky,
+            "daylight-coloured, in the upper hemisphere, reaching high or wide".into(),
+        )?;
+        out.lights.insert(sun_index.is_some() as usize, light);
+    }
+    if let (Err(why), Some(_)) = (&sun, candidates.first()) {
+        out.bright_reflectors.insert(0, format!("no sun: {why}"));
+    }
+    Ok(out)
+}
+
+/// The emitters worth classifying (at least [`MIN_LIGHT_SHARE`] of the energy, at most
+/// [`MAX_EMITTERS`]), with their colours.
+fn candidates_of(levels: &Levels, emitters: Vec<Emitter>) -> Result<Vec<Candidate>> {
+    emitters
+        .into_iter()
+        .filter(|e| e.stats.energy >= MIN_LIGHT_SHARE * levels.total_energy)
+        .take(MAX_EMITTERS)
+        .map(|e| {
+            Ok(Candidate {
+                colour: Colour::of(e.colour)?,
+                e,
+            })
+        })
+        .collect()
+}
+
+/// The windows (one light each) and the cells of the sky (one light, made by the caller once
+/// the lamps have added their sky patches). With any sky in view, the windows above the horizon
+/// are more of it.
+fn daylight_lights(
+    cells: &Cells,
+    levels: &Levels,
+    candidates: &[Candidate],
+    daylight: &[(usize, LightKind)],
+    dim: &[Region],
+    out: &mut Classified,
+) -> Result<Vec<usize>> {
+    let sky_seen = daylight.iter().any(|d| d.1 == LightKind::Sky)
+        || dim.iter().any(|d| kind_of(&d.stats) == LightKind::Sky);
+    let mut sky_cells = Vec::new();
+    let regions = daylight
+        .iter()
+        .map(|&(k, kind)| {
+            let above = candidates[k].e.stats.elevation_deg() > 0.0;
+            let kind = if sky_seen && above {
+                LightKind::Sky
+            } else {
+                kind
+            };
+            (&candidates[k].e.cells, kind, "bright and daylight-coloured")
+        })
+        .chain(dim.iter().map(|d| {
+            (
+                &d.cells,
+                kind_of(&d.stats),
+                "daylight-coloured and lit by no lamp found",
+            )
+        }));
+    for (set, kind, why) in regions {
+        match kind {
+            LightKind::Sky => sky_cells.extend(set),
+            _ => out.lights.push(daylight_light(
+                cells,
+                levels,
+                set.clone(),
+                LightKind::Window,
+                why.into(),
+            )?),
+        }
+    }
+    Ok(sky_cells)
+}
+
+/// The lamps among the emitters left: surfaces far dimmer than a lamp and of its colour are lit
+/// by it; sky patches join the sky; the rest are lamps or bright reflectors.
+fn lamp_lights(
+    cells: &Cells,
+    levels: &Levels,
+    free: &[&Candidate],
+    context: &Context,
+    settings: &SceneSettings,
+    sky_cells: &mut Vec<usize>,
+    out: &mut Classified,
+) -> Result<()> {
+    // With a sky in view, a bright daylight-coloured patch above the horizon is more of it
+    // (sky between leaves, through a gap in the clouds).
+    let sky_patch = |c: &Candidate| context.sky && is_sky_patch(c);
+    let lamps: Vec<&Candidate> = free.iter().copied().filter(|c| !sky_patch(c)).collect();
+    let lamp_peak = lamps.iter().map(|c| c.e.stats.peak).fold(0f64, f64::max);
+    let lit_by_lamp = |c: &Candidate| {
+        c.e.stats.peak < LIT_BY_LAMP * lamp_peak
+            && lamps.iter().any(|l| {
+                l.e.stats.peak > c.e.stats.peak / LIT_BY_LAMP
+                    && l.colour.uv_distance(&c.colour) <= LIT_COLOUR_UV
+            })
+    };
+    for &c in free {
+        if lit_by_lamp(c) {
+            out.bright_reflectors.push(format!(
+                "a bright region ({} pixels, {:.1} degrees up, {}) at {:.1e} of the brightest \
+                 lamp's luminance and near a lamp's colour: a surface lamps light",
+                c.e.cells.len(),
+                c.e.stats.elevation_deg(),
+                c.colour.describe(),
+                c.e.stats.peak / lamp_peak
+            ));
+        } else if sky_patch(c) {
+            sky_cells.extend(&c.e.cells);
+        } else {
+            match lamp_or_reflector(c, context, settings)? {
+                Ok(lamp) => out
+                    .lights
+                    .push(lamp_light(cells, levels, c, lamp, settings)),
+                Err(why) => out.bright_reflectors.push(why),
+            }
+        }
+    }
+    Ok(())
+}
+
+/// A bright patch of daylight colour above the horizon, at least [`SKY_MIN_K`].
+fn is_sky_patch(c: &Candidate) -> bool {
+    c.colour.daylight()
+        && c.colour.cct_k.is_some_and(|k| k >= SKY_MIN_K)
+        && c.e.stats.elevation_deg() > 0.0
+}
+
+/// A bright daylight-coloured emitter large enough to be a window or a patch of sky.
+fn is_window(c: &Candidate) -> bool {
+    c.colour.daylight()
+        && c.colour.cct_k.is_some_and(|k| k >= WINDOW_MIN_K)
+        && c.e.stats.solid_angle_sr >= WINDOW_MIN_SR
+}
+
+/// Sky when it reaches high or covers much of the sky, otherwise a window.
+fn kind_of(s: &RegionStats) -> LightKind {
+    if s.top_elevation_deg >= SKY_TOP_DEG || s.solid_angle_sr >= SKY_LARGE_SR {
+        LightKind::Sky
+    } else {
+        LightKind::Window
+    }
+}
+
+/// A dim daylight-coloured region.
+struct Region {
+    cells: Vec<usize>,
+    stats: RegionStats,
+}
+
+/// The dim daylight-coloured regions of the upper hemisphere that no lamp explains and no window
+/// lights.
+fn dim_skies(
+    cells: &Cells,
+    emitters: &[Candidate],
+    lamp_whites: &[Colour],
+    windows: &[(Colour, f64)],
+) -> Result<Vec<Region>> {
+    let mut in_emitter = vec![false; cells.len()];
+    for c in emitters {
+        for &i in &c.e.cells {
+            in_emitter[i] = true;
+        }
+    }
+    let mask: Vec<bool> = (0..cells.len())
+        .map(|i| {
+            !in_emitter[i]
+                && cells.y[i] > 0.0
+                && cells.direction(i)[1] > 0.0
+                && daylight_coloured(&cells.xyz(i))
+        })
+        .collect();
+    let mut out = Vec::new();
+    for region in components(cells, &mask) {
+        let stats = RegionStats::of(cells, &region);
+        if stats.solid_angle_sr < SKY_MIN_SR {
+            continue;
+        }
+        let colour = Colour::of(stats.mean_xyz)?;
+        if !colour.cct_k.is_some_and(|k| k >= SKY_MIN_K) || explained(&colour, lamp_whites) {
+            continue;
+        }
+        let lit_by_window = windows.iter().any(|(w, y)| {
+            colour.uv_distance(w) <= EXPLAINED_UV && stats.mean_xyz[1] * LIT_BY_WINDOW <= *y
+        });
+        if !lit_by_window {
+            out.push(Region {
+                cells: region,
+                stats,
+            });
+        }
+    }
+    Ok(out)
+}
+
+/// Whether a colour is a lamp's white or a mix of two lamps' (within [`EXPLAINED_UV`]).
+fn explained(c: &Colour, lamps: &[Colour]) -> bool {
+    let p = c.uv;
+    let near_segment = |a: [f64; 2], b: [f64; 2]| {
+        let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+        let len2 = dx * dx + dy * dy;
+        let t = if len2 > 0.0 {
+            (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        (p[0] - a[0] - t * dx).hypot(p[1] - a[1] - t * dy) <= EXPLAINED_UV
+    };
+    lamps
+        .iter()
+        .enumerate()
+        .any(|(i, a)| lamps[i..].iter().any(|b| near_segment(a.uv, b.uv)))
+}
+
+/// The index of the sun among the candidates, or why there is none.
+fn sun_of(
+    candidates: &[Candidate],
+    levels: &Levels,
+    daylight: bool,
+    settings: &SceneSettings,
+) -> std::result::Result<usize, String> {
+    let Some(s) = &settings.sun else {
+        return Err("sun detection is off (--sun off)".into());
+    };
+    let Some(c) = candidates.first() else {
+        return Err("nothing in the map stands out".into());
+    };
+    let st = &c.e.stats;
+    let region = format!(
+        "the brightest region ({} pixels, core {:.2e} sr, {:.1}% of the energy, {:.1} degrees \
+         up, {})",
+        c.e.cells.len(),
+        c.e.core_solid_angle_sr,
+        100.0 * st.energy / levels.total_energy,
+        st.elevation_deg(),
+        c.colour.describe()
+    );
+    let share = st.energy / levels.total_energy;
+    let checks: [(bool, String); 6] = [
+        (
+            c.e.core_solid_angle_sr <= s.max_solid_angle_sr,
+            format!(
+                "its core is not compact (a sun covers at most {:.2e} sr)",
+                s.max_solid_angle_sr
+            ),
+        ),
+        (
+            st.peak >= SUN_CONTRAST * levels.median,
+            format!("it is not {SUN_CONTRAST:.0} times brighter than the map's median"),
+        ),
+        (
+            st.elevation_deg() >= SUN_MIN_ELEVATION_DEG,
+            "it is below the horizon".into(),
+        ),
+        (
+            c.colour.cct_k.is_some() && c.colour.duv.abs() <= SUN_MAX_DUV,
+            "its colour is neither daylight nor Planckian".into(),
+        ),
+        (
+            unique(c, &candidates[1..]),
+            format!(
+                "it is not unique: another emitter's peak is within {:.0}x of its own",
+                1.0 / SUN_UNIQUE
+            ),
+        ),
+        (
+            daylight
+                || (share >= s.min_energy_share && c.colour.cct_k.is_some_and(|k| k >= 4000.0)),
+            format!(
+                "no daylight sky or window is seen with it, and it does not hold {:.0}% of the \
+                 energy in a daylight colour",
+                100.0 * s.min_energy_share
+            ),
+        ),
+    ];
+    match checks.iter().find(|(ok, _)| !ok) {
+        Some((_, why)) => Err(format!("{region}: {why}")),
+        None => Ok(0),
+    }
+}
+
+/// No other emitter rivals `c`'s peak, but for its reflections (below the horizon, its colour).
+fn unique(c: &Candidate, others: &[Candidate]) -> bool {
+    others.iter().all(|o| {
+        let reflection =
+            o.e.stats.elevation_deg() < 0.0 && o.colour.uv_distance(&c.colour) <= LAMP_MATCH_UV;
+        reflection || o.e.stats.peak < SUN_UNIQUE * c.e.stats.peak
+    })
+}
+
+fn share(levels: &Levels, s: &RegionStats) -> f64 {
+    if levels.total_energy > 0.0 {
+        s.energy / levels.total_energy
+    } else {
+        0.0
+    }
+}
+
+/// A light from a set of cells, measured.
+fn light_of(
+    cells: &Cells,
+    levels: &Levels,
+    set: Vec<usize>,
+    kind: LightKind,
+    colour: Colour,
+    spd: LightSpd,
+    reason: String,
+) -> Light {
+    let st = RegionStats::of(cells, &set);
+    Light {
+        kind,
+        spd: spd.label(),
+        spd_choice: spd,
+        cct_k: colour.cct_k,
+        duv: colour.duv,
+        xy: colour.xy,
+        pixels: set.len(),
+        solid_angle_sr: st.solid_angle_sr,
+        energy_share: share(levels, &st),
+        direction: st.direction,
+        elevation_deg: st.elevation_deg(),
+        clipped_pixels: set.iter().filter(|&&i| levels.is_clipped(cells, i)).count(),
+        colour_from_halo: false,
+        lamp: None,
+        reason,
+        colour: colour.xyz,
+        cells: set,
+    }
+}
+
+/// The daylight of a colour: CIE daylight within its range, Planckian below.
+fn daylight_spd(c: &Colour) -> LightSpd {
+    LightSpd::Daylight {
+        cct_k: c.cct_k.unwrap_or(6504.0),
+    }
+}
+
+fn sun_light(
+    cells: &Cells,
+    levels: &Levels,
+    c: &Candidate,
+    settings: &SceneSettings,
+) -> Result<Light> {
+    let s = settings.sun.as_ref().expect("a sun was searched for");
+    let peak_dir = Vector3::from(cells.direction(c.e.stats.peak_cell));
+    let cos_max = s.max_radius_deg.to_radians().cos();
+    let core: Vec<usize> =
+        c.e.cells
+            .iter()
+            .copied()
+            .filter(|&i| {
+                cells.y[i] as f64 >= s.peak_fraction * c.e.stats.peak
+                    && Vector3::from(cells.direction(i)).dot(&peak_dir) >= cos_max
+            })
+            .collect();
+    let mut l = light_of(
+        cells,
+        levels,
+        core,
+        LightKind::Sun,
+        c.colour,
+        daylight_spd(&c.colour),
+        format!(
+            "compact, {:.0} times the median luminance, {:.1} degrees up, {}, unique, with \
+             daylight about",
+            c.e.stats.peak / levels.median,
+            c.e.stats.elevation_deg(),
+            c.colour.describe()
+        ),
+    );
+    l.colour_from_halo = c.e.colour_from_halo;
+    Ok(l)
+}
+
+fn daylight_light(
+    cells: &Cells,
+    levels: &Levels,
+    set: Vec<usize>,
+    kind: LightKind,
+    why: String,
+) -> Result<Light> {
+    let st = RegionStats::of(cells, &set);
+    let colour = Colour::of(st.mean_xyz)?;
+    let reason = format!(
+        "{why} ({}, {:.3} sr, mean luminance {:.3e})",
+        colour.describe(),
+        st.solid_angle_sr,
+        st.mean_xyz[1]
+    );
+    Ok(light_of(
+        cells,
+        levels,
+        set,
+        kind,
+        colour,
+        daylight_spd(&colour),
+        reason,
+    ))
+}
+
+/// What is known about daylight when a lamp candidate is judged.
+struct Context {
+    daylight: bool,
+    /// A sky is in view.
+    sky: bool,
+    /// The brightest sky or window's mean luminance.
+    daylight_level: f64,
+    sun: Option<Colour>,
+}
+
+/// A lamp's match, or why the emitter is a bright reflector instead.
+fn lamp_or_reflector(
+    c: &Candidate,
+    ctx: &Context,
+    settings: &SceneSettings,
+) -> Result<std::result::Result<LampMatch, String>> {
+    let st = &c.e.stats;
+    let m = match_lamp(c.colour.uv, c.colour.cct_k, st.elongation)?;
+    let what = format!(
+        "a bright region ({} pixels, {:.1} degrees up, {})",
+        c.e.cells.len(),
+        st.elevation_deg(),
+        c.colour.describe()
+    );
+    if let Some(sun) = &ctx.sun {
+        if st.elevation_deg() < 0.0 && c.colour.uv_distance(sun) <= LAMP_MATCH_UV {
+            return Ok(Err(format!(
+                "{what} below the horizon of the sun's colour: a reflection of the sun"
+            )));
+        }
+    }
+    let named = settings.lamps.is_some();
+    let outshines = st.mean_xyz[1] >= DAYLIGHT_LAMP_CONTRAST * ctx.daylight_level;
+    if ctx.daylight && !outshines && st.elevation_deg() < 0.0 {
+        return Ok(Err(format!(
+            "{what} below the horizon in daylight and not {DAYLIGHT_LAMP_CONTRAST:.0} times \
+             brighter than the sky: a sunlit surface or a reflection"
+        )));
+    }
+    if ctx.daylight && !named && m.distance_uv > LAMP_MATCH_UV && !outshines {
+        return Ok(Err(format!(
+            "{what} matches no lamp (nearest {} at {:.4} uv) and is not {DAYLIGHT_LAMP_CONTRAST:.0} \
+             times brighter than the sky: a sunlit or daylit surface",
+            m.spd, m.distance_uv
+        )));
+    }
+    Ok(Ok(m))
+}
+
+fn lamp_light(
+    cells: &Cells,
+    levels: &Levels,
+    c: &Candidate,
+    m: LampMatch,
+    settings: &SceneSettings,
+) -> Light {
+    let spd = match &settings.lamps {
+        Some(name) => LightSpd::Table { name: name.clone() },
+        None => match m.family {
+            super::Family::Incandescent => LightSpd::Planckian {
+                cct_k: c
+                    .colour
+                    .cct_k
+                    .unwrap_or(2856.0)
+                    .clamp(super::families::FILAMENT_K.0, super::families::FILAMENT_K.1),
+            },
+            _ => LightSpd::Table {
+                name: m.spd.clone(),
+            },
+        },
+    };
+    let reason = match &settings.lamps {
+        Some(name) => format!(
+            "an emitter not of daylight; its spectrum is {name} (--light); its colour is nearest \
+             {} ({}, {:.4} uv)",
+            m.spd,
+            m.family.name(),
+            m.distance_uv
+        ),
+        None => format!(
+            "an emitter not of daylight ({}); {} ({}, {:.4} uv from its white: {})",
+            c.colour.describe(),
+            m.spd,
+            m.family.name(),
+            m.distance_uv,
+            m.why
+        ),
+    };
+    let mut l = light_of(
+        cells,
+        levels,
+        c.e.core.clone(),
+        LightKind::Lamp,
+        c.colour,
+        spd,
+        reason,
+    );
+    l.colour_from_halo = c.e.colour_from_halo;
+    l.clipped_pixels = c.e.clipped_cells;
+    l.lamp = Some(m);
+    l
+}
