@@ -15,6 +15,17 @@ use std::io::IsTerminal;
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
+#[command(after_help = "\
+Layouts: latlong (2:1), cube (OpenEXR's N x 6N), hcross (4:3), vcross (3:4), hstrip (6:1),
+vstrip (1:6) and faces (six files); see the README's layout table for each face's orientation.
+
+Examples:
+  specmap convert envmaps/sunrise.exr -o sunrise.spectral.exr --light auto
+  specmap convert envmaps/forest.exr -o forest.exr --mode exact --precision float
+  specmap convert cross.hdr -o cube.exr --in-layout hcross --out-layout cube --size 256
+  specmap convert sky_{face}.exr -o sky.exr --in-layout faces
+  specmap convert blender.exr -o b.exr --up z --rotation 90
+  specmap convert envmaps/sunrise.exr -o s.exr --format basis --tolerance 0.5 --quiet")]
 pub struct ConvertArgs {
     /// Input map: OpenEXR or Radiance .hdr; with --in-layout faces, a pattern with {face}
     /// (px, nx, py, ny, pz, nz).

@@ -6,6 +6,12 @@ use specmap::envmap::roundtrip::{round_trip_file, write_heatmap};
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
+#[command(after_help = "\
+Examples:
+  specmap convert envmaps/sunrise.exr -o sunrise.spectral.exr
+  specmap roundtrip sunrise.spectral.exr
+  specmap roundtrip sunrise.spectral.exr --heatmap roundtrip.png --json
+  specmap roundtrip sunrise.spectral.exr --observer cie1964 --rule simpson")]
 pub struct RoundtripArgs {
     /// A spectral OpenEXR (from `specmap convert`, or any Fichet-layout file with R, G, B).
     file: PathBuf,
