@@ -498,3 +498,51 @@ fn the_white_premise_is_chosen_reported_and_recorded() {
     assert_eq!(r["white"]["premise"], "light");
     assert!(r["white"]["reason"].as_str().unwrap().contains("neutral"));
 }
+
+/// A vertical strip (N x 6N, +X -X +Y -Y +Z -Z) holds the pixels of OpenEXR's cube: the same
+/// pixels read as either convert to the same lat-long, pixel for pixel. (Read with ±Y turned
+/// 180°, a strip of OpenEXR's faces came out scrambled at the poles.)
+#[test]
+fn a_vertical_strip_converts_as_the_cube_of_the_same_pixels() {
+    let d = tempfile::tempdir().unwrap();
+    let n = 16;
+    let input = d.path().join("faces.exr");
+    // A different gradient on every face, so that a turned or swapped face shows.
+    write_rgb(&input, n, 6 * n, |x, y| {
+        let (face, j) = (y / n, y % n);
+        [
+            0.1 + (face as f32 + 1.0) * 0.2,
+            0.2 + x as f32 / n as f32,
+            0.3 + j as f32 / n as f32,
+        ]
+    });
+    let preview = |layout: &str| {
+        let out = d.path().join(format!("{layout}.exr"));
+        let r = convert_json(&[
+            input.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--in-layout",
+            layout,
+            "--out-layout",
+            "latlong",
+            "--size",
+            "32",
+            "--sun",
+            "off",
+            "--range",
+            "400:700:50",
+            "--precision",
+            "float",
+        ]);
+        assert_eq!(r["input_layout"], layout);
+        specmap::envmap::exrio::read_rgb(&out, None)
+            .unwrap()
+            .image
+            .pixels
+    };
+    let (cube, strip) = (preview("cube"), preview("vstrip"));
+    assert_eq!(cube.len(), 64 * 32);
+    let differ = cube.iter().zip(&strip).filter(|(a, b)| a != b).count();
+    assert_eq!(differ, 0, "{differ} of {} pixels differ", cube.len());
+}
