@@ -190,7 +190,9 @@ fn a_progress_bar_on_a_terminal_only() {
         !shown.contains("0/0 rows"),
         "drawn before the row count was known: {shown}"
     );
-    assert!(!run("--quiet").contains("converting ["));
+    // --quiet: nothing at all, on a terminal too.
+    let quiet = run("--quiet");
+    assert!(quiet.trim().is_empty(), "{quiet}");
     // Not a terminal: no bar (the tests above capture stderr through a pipe).
     let piped = specmap(&[
         "convert",
@@ -545,4 +547,44 @@ fn a_vertical_strip_converts_as_the_cube_of_the_same_pixels() {
     assert_eq!(cube.len(), 64 * 32);
     let differ = cube.iter().zip(&strip).filter(|(a, b)| a != b).count();
     assert_eq!(differ, 0, "{differ} of {} pixels differ", cube.len());
+}
+
+/// `--quiet` prints nothing but errors: nothing on success (with --json, the JSON alone), the
+/// error alone on failure.
+#[test]
+fn quiet_prints_nothing_but_errors() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("q.exr");
+    let args = |extra: &[&'static str]| {
+        let mut v = vec![
+            "convert".to_string(),
+            sample("sunrise.exr"),
+            "-o".into(),
+            out.display().to_string(),
+            "--range".into(),
+            "400:700:20".into(),
+            "--quiet".into(),
+        ];
+        v.extend(extra.iter().map(|s| s.to_string()));
+        v
+    };
+    let run = |extra: &[&'static str]| {
+        let a = args(extra);
+        specmap(&a.iter().map(String::as_str).collect::<Vec<_>>())
+    };
+    let ok = run(&[]);
+    assert!(ok.status.success());
+    assert_eq!(String::from_utf8_lossy(&ok.stdout), "");
+    assert_eq!(String::from_utf8_lossy(&ok.stderr), "");
+    assert!(out.is_file());
+    let json = run(&["--json"]);
+    assert!(json.status.success());
+    assert_eq!(String::from_utf8_lossy(&json.stderr), "");
+    let v: serde_json::Value = serde_json::from_slice(&json.stdout).expect("JSON alone");
+    assert_eq!(v["input_layout"], "latlong");
+    let bad = run(&["--rotation", "inf"]);
+    assert_eq!(bad.status.code(), Some(1));
+    assert_eq!(String::from_utf8_lossy(&bad.stdout), "");
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(err.starts_with("error: --rotation inf"), "{err}");
 }

@@ -113,7 +113,7 @@ pub struct ConvertArgs {
     /// NaN and infinite pixels are an error (default: set to 0 and counted).
     #[arg(long)]
     strict: bool,
-    /// No progress bar.
+    /// Print nothing but errors: no progress bar, no summary (with --json, the JSON only).
     #[arg(long)]
     quiet: bool,
     /// Machine-readable summary.
@@ -367,6 +367,9 @@ pub fn run(a: ConvertArgs) -> anyhow::Result<()> {
     }
     if a.json {
         super::emit(&(serde_json::to_string_pretty(&report)? + "\n"));
+        return Ok(());
+    }
+    if a.quiet {
         return Ok(());
     }
     let r = &report;
