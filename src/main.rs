@@ -7,6 +7,10 @@ use std::process::ExitCode;
 
 fn main() -> ExitCode {
     let args = cli::Cli::parse();
+    // Before any thread starts (it sets an environment variable).
+    if args.may_use_gpu() {
+        cli::runtime_dir::provide();
+    }
     remove_temp_files_on_signals();
     match cli::run(args) {
         Ok(()) => ExitCode::SUCCESS,

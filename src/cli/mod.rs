@@ -10,6 +10,7 @@ mod guard;
 mod render;
 mod rendition;
 mod roundtrip;
+pub mod runtime_dir;
 mod thinfilm;
 
 /// `writeln!` into a String (infallible).
@@ -74,6 +75,16 @@ enum Command {
     Roundtrip(roundtrip::RoundtripArgs),
     /// Multilayer thin film: R and T spectra (paper Eq. 2-9, N layers) and the reflected colour.
     Thinfilm(thinfilm::ThinfilmArgs),
+}
+
+impl Cli {
+    /// Whether the command may open a GPU (and so load the Vulkan loader and its layers).
+    pub fn may_use_gpu(&self) -> bool {
+        matches!(
+            self.command,
+            Command::Demo(_) | Command::Bench(_) | Command::Render(_)
+        )
+    }
 }
 
 pub fn run(cli: Cli) -> anyhow::Result<()> {
