@@ -4,6 +4,7 @@
 pub mod convert;
 pub mod engine;
 pub mod exrio;
+pub mod heatmap;
 pub mod layout;
 pub mod light;
 pub mod roundtrip;
