@@ -203,15 +203,18 @@ pub fn write_atomic(dest: &Path, bytes: &[u8]) -> Result<()> {
     rename_into_place(&tmp, dest)
 }
 
-/// Removes every registered temporary file, for a program about to exit on a signal. The
-/// registry stays locked afterwards, so no thread can create another one before the exit: call
-/// it only right before ending the process.
-pub fn remove_temp_files() {
+/// Removes every registered temporary file, for a program about to exit on a signal, and
+/// returns the ones it removed (to be named in the exit message). The registry stays locked
+/// afterwards, so no thread can create another one before the exit: call it only right before
+/// ending the process.
+pub fn remove_temp_files() -> Vec<PathBuf> {
     let mut files = registry();
-    for p in files.drain(..) {
-        let _ = std::fs::remove_file(&p);
-    }
+    let removed = files
+        .drain(..)
+        .filter(|p| std::fs::remove_file(p).is_ok())
+        .collect();
     std::mem::forget(files);
+    removed
 }
 
 #[cfg(test)]

@@ -7,6 +7,10 @@ use std::process::ExitCode;
 
 fn main() -> ExitCode {
     let args = cli::Cli::parse();
+    // Before any thread starts (it sets an environment variable).
+    if args.may_use_gpu() {
+        cli::runtime_dir::provide();
+    }
     remove_temp_files_on_signals();
     match cli::run(args) {
         Ok(()) => ExitCode::SUCCESS,
@@ -38,8 +42,8 @@ fn error_text(e: &anyhow::Error) -> String {
 }
 
 /// On SIGINT, SIGTERM or SIGHUP: remove the temporary files of the outputs being written (so an
-/// interrupted run leaves nothing behind; finished outputs stay) and exit with 128 + the signal,
-/// as a shell reports a process killed by it.
+/// interrupted run leaves nothing behind; finished outputs stay), say so, and exit with 128 +
+/// the signal, as a shell reports a process killed by it.
 #[cfg(unix)]
 fn remove_temp_files_on_signals() {
     use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
@@ -54,7 +58,9 @@ fn remove_temp_files_on_signals() {
         .name("specmap signals".into())
         .spawn(move || {
             if let Some(signal) = signals.forever().next() {
-                specmap::io::remove_temp_files();
+                let removed = specmap::io::remove_temp_files();
+                let name = signal_hook::low_level::signal_name(signal).unwrap_or("a signal");
+                eprint!("{}", interrupted_text(name, &removed));
                 std::process::exit(128 + signal);
             }
         });
@@ -67,6 +73,29 @@ fn remove_temp_files_on_signals() {
 
 #[cfg(not(unix))]
 fn remove_temp_files_on_signals() {}
+
+/// What an interrupted run says on its way out: the signal, and each temporary file removed
+/// (the output it was becoming is left as it was: absent, or the previous file).
+#[cfg_attr(not(unix), allow(dead_code))]
+fn interrupted_text(signal: &str, removed: &[std::path::PathBuf]) -> String {
+    // On a terminal the line may hold a progress bar (and the shell's ^C): start a new one.
+    let mut out = if std::io::IsTerminal::is_terminal(&std::io::stderr()) {
+        "\n".to_string()
+    } else {
+        String::new()
+    };
+    if removed.is_empty() {
+        out += &format!("interrupted by {signal}: no output was being written\n");
+    }
+    for p in removed {
+        out += &format!(
+            "interrupted by {signal}: removed the unfinished output's temporary file {}; the \
+             output is left as it was\n",
+            p.display()
+        );
+    }
+    out
+}
 
 #[cfg(test)]
 mod tests {

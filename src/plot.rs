@@ -25,7 +25,8 @@ pub struct Figure {
 
 static FONT: Once = Once::new();
 
-fn register_font() {
+/// Registers the embedded font as "sans-serif" (once), for every text plotters draws.
+pub(crate) fn register_font() {
     FONT.call_once(|| {
         // DejaVu Sans (Bitstream Vera licence, assets/fonts/LICENSE-DejaVu.txt).
         let bytes: &'static [u8] = include_bytes!("../assets/fonts/DejaVuSans.ttf");

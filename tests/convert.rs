@@ -215,7 +215,9 @@ fn a_progress_bar_on_a_terminal_only() {
         !shown.contains("0/0 rows"),
         "drawn before the row count was known: {shown}"
     );
-    assert!(!run("--quiet").contains("converting ["));
+    // --quiet: nothing at all, on a terminal too.
+    let quiet = run("--quiet");
+    assert!(quiet.trim().is_empty(), "{quiet}");
     // Not a terminal: no bar (the tests above capture stderr through a pipe).
     let piped = specmap(&[
         "convert",
@@ -522,4 +524,92 @@ fn the_white_premise_is_chosen_reported_and_recorded() {
     let r = convert_json(&[grey.to_str().unwrap(), "-o", o, "--light", "FL2"]);
     assert_eq!(r["white"]["premise"], "light");
     assert!(r["white"]["reason"].as_str().unwrap().contains("neutral"));
+}
+
+/// A vertical strip (N x 6N, +X -X +Y -Y +Z -Z) holds the pixels of OpenEXR's cube: the same
+/// pixels read as either convert to the same lat-long, pixel for pixel. (Read with ±Y turned
+/// 180°, a strip of OpenEXR's faces came out scrambled at the poles.)
+#[test]
+fn a_vertical_strip_converts_as_the_cube_of_the_same_pixels() {
+    let d = tempfile::tempdir().unwrap();
+    let n = 16;
+    let input = d.path().join("faces.exr");
+    // A different gradient on every face, so that a turned or swapped face shows.
+    write_rgb(&input, n, 6 * n, |x, y| {
+        let (face, j) = (y / n, y % n);
+        [
+            0.1 + (face as f32 + 1.0) * 0.2,
+            0.2 + x as f32 / n as f32,
+            0.3 + j as f32 / n as f32,
+        ]
+    });
+    let preview = |layout: &str| {
+        let out = d.path().join(format!("{layout}.exr"));
+        let r = convert_json(&[
+            input.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--in-layout",
+            layout,
+            "--out-layout",
+            "latlong",
+            "--size",
+            "32",
+            "--sun",
+            "off",
+            "--range",
+            "400:700:50",
+            "--precision",
+            "float",
+        ]);
+        assert_eq!(r["input_layout"], layout);
+        specmap::envmap::exrio::read_rgb(&out, None)
+            .unwrap()
+            .image
+            .pixels
+    };
+    let (cube, strip) = (preview("cube"), preview("vstrip"));
+    assert_eq!(cube.len(), 64 * 32);
+    let differ = cube.iter().zip(&strip).filter(|(a, b)| a != b).count();
+    assert_eq!(differ, 0, "{differ} of {} pixels differ", cube.len());
+}
+
+/// `--quiet` prints nothing but errors: nothing on success (with --json, the JSON alone), the
+/// error alone on failure.
+#[test]
+fn quiet_prints_nothing_but_errors() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("q.exr");
+    let args = |extra: &[&'static str]| {
+        let mut v = vec![
+            "convert".to_string(),
+            sample("sunrise.exr"),
+            "-o".into(),
+            out.display().to_string(),
+            "--range".into(),
+            "400:700:20".into(),
+            "--quiet".into(),
+        ];
+        v.extend(extra.iter().map(|s| s.to_string()));
+        v
+    };
+    let run = |extra: &[&'static str]| {
+        let a = args(extra);
+        specmap(&a.iter().map(String::as_str).collect::<Vec<_>>())
+    };
+    let ok = run(&[]);
+    assert!(ok.status.success());
+    assert_eq!(String::from_utf8_lossy(&ok.stdout), "");
+    assert_eq!(String::from_utf8_lossy(&ok.stderr), "");
+    assert!(out.is_file());
+    let json = run(&["--json"]);
+    assert!(json.status.success());
+    assert_eq!(String::from_utf8_lossy(&json.stderr), "");
+    let v: serde_json::Value = serde_json::from_slice(&json.stdout).expect("JSON alone");
+    assert_eq!(v["input_layout"], "latlong");
+    let bad = run(&["--rotation", "inf"]);
+    assert_eq!(bad.status.code(), Some(1));
+    assert_eq!(String::from_utf8_lossy(&bad.stdout), "");
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(err.starts_with("error: --rotation inf"), "{err}");
 }

@@ -217,3 +217,27 @@ fn a_map_that_is_not_an_image_fails_before_anything_is_written() {
         assert!(!dir.exists(), "{} was created", dir.display());
     }
 }
+
+/// A new user's first run, from a shell without XDG_RUNTIME_DIR (ssh, CI, a container): the
+/// README's main job, on whatever renderer the machine has, prints no line with "error" when
+/// nothing is wrong. (Mesa's Vulkan device-select layer used to make libwayland print "error:
+/// XDG_RUNTIME_DIR is invalid or not set" twice before the demo's own lines.)
+#[test]
+fn the_first_run_prints_no_error_without_a_runtime_dir() {
+    let t = tempfile::tempdir().unwrap();
+    let dir = t.path().join("demo");
+    let out = Command::new(env!("CARGO_BIN_EXE_specmap"))
+        .args(["demo", "--quick", "-o", dir.to_str().unwrap()])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .env_remove("XDG_RUNTIME_DIR")
+        .output()
+        .expect("the specmap binary runs");
+    let text = String::from_utf8_lossy(&out.stderr) + String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}");
+    let errors: Vec<&str> = text
+        .lines()
+        .filter(|l| l.to_lowercase().contains("error"))
+        .collect();
+    assert!(errors.is_empty(), "{errors:#?}\nin:\n{text}");
+    assert!(text.contains("demo [5/5] page"), "{text}");
+}

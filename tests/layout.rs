@@ -297,8 +297,8 @@ fn cube_face_centres_and_corners() {
     }
 }
 
-/// The cross's cells: +X +Z -X -Z in the middle row (unmirrored, as the lat-long reads),
-/// +Y above and -Y below +Z, each side face as OpenEXR's cube face.
+/// The cross's cells: -X -Z +X +Z in the middle row, +Y above and -Y below -Z (cmft's
+/// arrangement of OpenEXR's faces); strips in OpenEXR's face order.
 #[test]
 fn cross_and_strip_face_order() {
     let n = 3;
@@ -320,10 +320,10 @@ fn cross_and_strip_face_order() {
         cells(Layout::HCross),
         vec![
             (1, 0, PosY),
-            (0, 1, PosX),
-            (1, 1, PosZ),
-            (2, 1, NegX),
-            (3, 1, NegZ),
+            (0, 1, NegX),
+            (1, 1, NegZ),
+            (2, 1, PosX),
+            (3, 1, PosZ),
             (1, 2, NegY)
         ]
     );
@@ -331,11 +331,11 @@ fn cross_and_strip_face_order() {
         cells(Layout::VCross),
         vec![
             (1, 0, PosY),
-            (0, 1, PosX),
-            (1, 1, PosZ),
-            (2, 1, NegX),
+            (0, 1, NegX),
+            (1, 1, NegZ),
+            (2, 1, PosX),
             (1, 2, NegY),
-            (1, 3, NegZ)
+            (1, 3, PosZ)
         ]
     );
     let order: Vec<Face> = cells(Layout::HStrip).iter().map(|c| c.2).collect();
@@ -346,26 +346,25 @@ fn cross_and_strip_face_order() {
     assert_eq!(order, Face::ALL.to_vec());
 }
 
-/// Side faces of the crosses and strips are OpenEXR's face images; ±Y are turned 180° in the
-/// crosses and strips; -Z is turned 180° in the vertical cross.
-#[test]
-fn cross_faces_match_openexr_faces() {
-    let n = 4;
-    let cube = map_of(Layout::Cube, n);
-    let face_pixel = |m: &EnvMap, f: Face, i: usize, j: usize| -> [f64; 3] {
-        // Find the cell holding face f.
-        for r in 0..m.image.height / n {
-            for c in 0..m.image.width / n {
-                if let Some(d) = m.direction(c * n, r * n) {
-                    if Face::of(m.direction(c * n + n / 2, r * n + n / 2).unwrap()) == f {
-                        let _ = d;
-                        return m.direction(c * n + i, r * n + j).unwrap();
-                    }
-                }
+/// Pixel (i, j) of face `f`'s cell in `m` (face size `n`).
+fn face_pixel(m: &EnvMap, n: usize, f: Face, i: usize, j: usize) -> [f64; 3] {
+    for r in 0..m.image.height / n {
+        for c in 0..m.image.width / n {
+            let centre = m.direction(c * n + n / 2, r * n + n / 2);
+            if centre.is_some_and(|d| Face::of(d) == f) {
+                return m.direction(c * n + i, r * n + j).unwrap();
             }
         }
-        panic!("no face {f:?}");
-    };
+    }
+    panic!("no face {f:?}");
+}
+
+/// Every face of the crosses and strips is OpenEXR's face image (pixel (i, j) looks where the
+/// cube's pixel (i, j) of that face looks), except the vertical cross's +Z, turned 180°.
+#[test]
+fn every_face_has_openexrs_orientation() {
+    let n = 4;
+    let cube = map_of(Layout::Cube, n);
     for layout in [
         Layout::HCross,
         Layout::VCross,
@@ -374,8 +373,7 @@ fn cross_faces_match_openexr_faces() {
     ] {
         let m = map_of(layout, n);
         for f in Face::ALL {
-            let turned = matches!(f, Face::PosY | Face::NegY)
-                || (f == Face::NegZ && layout == Layout::VCross);
+            let turned = f == Face::PosZ && layout == Layout::VCross;
             for j in 0..n {
                 for i in 0..n {
                     let (ci, cj) = if turned {
@@ -383,15 +381,154 @@ fn cross_faces_match_openexr_faces() {
                     } else {
                         (i, j)
                     };
-                    let want = face_pixel(&cube, f, ci, cj);
                     assert_dir(
-                        face_pixel(&m, f, i, j),
-                        want,
+                        face_pixel(&m, n, f, i, j),
+                        face_pixel(&cube, n, f, ci, cj),
                         1e-12,
                         &format!("{layout:?} {} ({i},{j})", f.name()),
                     );
                 }
             }
+        }
+    }
+}
+
+/// A vertical strip holds the same pixels as OpenEXR's cube, so both read every pixel as the
+/// same direction and give the same value in every direction.
+#[test]
+fn a_vertical_strip_is_openexrs_cube() {
+    let n = 8;
+    let cube = filled(Layout::Cube, n, smooth);
+    let strip = EnvMap::new(Layout::VStrip, cube.image.clone()).unwrap();
+    for y in 0..6 * n {
+        for x in 0..n {
+            assert_eq!(strip.direction(x, y), cube.direction(x, y), "({x},{y})");
+        }
+    }
+    for k in 0..500 {
+        let t = k as f64 * 0.37;
+        let d = [
+            t.sin() * (1.3 * t).cos(),
+            (0.7 * t).cos(),
+            t.cos() * (2.1 * t).sin(),
+        ];
+        assert_eq!(strip.sample(d), cube.sample(d), "{d:?}");
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Transcriptions of cmft's src/cmft/cubemaputils.h and src/cmft/image.cpp (dariomanesku/cmft,
+// commit cad5f31bac66fd05987d667af62311c444df6d46): its face frame, cross cells and lat-long.
+// ---------------------------------------------------------------------------------------------
+
+/// `s_faceUvVectors`: for cmft's faces +x, -x, +y, -y, +z, -z, the directions of u (right),
+/// v (down) and the face's centre.
+const CMFT_FACE_UV: [[[f64; 3]; 3]; 6] = [
+    [[0.0, 0.0, -1.0], [0.0, -1.0, 0.0], [1.0, 0.0, 0.0]],
+    [[0.0, 0.0, 1.0], [0.0, -1.0, 0.0], [-1.0, 0.0, 0.0]],
+    [[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]],
+    [[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, -1.0, 0.0]],
+    [[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0]],
+    [[-1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]],
+];
+
+/// `texelCoordToVec(u, v, face)` for u, v in [-1, 1] (not normalised).
+fn cmft_texel_to_vec(u: f64, v: f64, face: usize) -> [f64; 3] {
+    let [uu, vv, c] = CMFT_FACE_UV[face];
+    [0, 1, 2].map(|k| u * uu[k] + v * vv[k] + c[k])
+}
+
+/// The cell (column, row) of each cmft face in `imageCubemapFromCross`'s `faceOffsets`, and
+/// whether the face is flipped in x and y (the vertical cross's -z).
+fn cmft_cross_cell(face: usize, vertical: bool) -> (usize, usize, bool) {
+    match (face, vertical) {
+        (0, _) => (2, 1, false),
+        (1, _) => (0, 1, false),
+        (2, _) => (1, 0, false),
+        (3, _) => (1, 2, false),
+        (4, _) => (1, 1, false),
+        (_, false) => (3, 1, false),
+        (_, true) => (1, 3, true),
+    }
+}
+
+/// Every pixel of a cross cmft reads as cmft's direction c, its cmft face and its position in
+/// that face (the face's own pixel, after cmft's flip).
+fn cmft_cross_pixels(n: usize, vertical: bool) -> Vec<(usize, usize, [f64; 3])> {
+    let mut v = Vec::new();
+    for face in 0..6 {
+        let (col, row, flip) = cmft_cross_cell(face, vertical);
+        for j in 0..n {
+            for i in 0..n {
+                let (fi, fj) = if flip { (n - 1 - i, n - 1 - j) } else { (i, j) };
+                let u = 2.0 * (fi as f64 + 0.5) / n as f64 - 1.0;
+                let w = 2.0 * (fj as f64 + 0.5) / n as f64 - 1.0;
+                v.push((col * n + i, row * n + j, cmft_texel_to_vec(u, w, face)));
+            }
+        }
+    }
+    v
+}
+
+/// cmft's crosses, read in OpenEXR's right-handed world: cmft's frame is left-handed (the
+/// OpenGL cube-map convention), and with z negated each of its face images is OpenEXR's. Every
+/// pixel then looks where cmft's own reading says, and the unused cells are the same.
+#[test]
+fn crosses_match_cmft_with_z_negated() {
+    let n = 6;
+    for (layout, vertical) in [(Layout::HCross, false), (Layout::VCross, true)] {
+        let m = map_of(layout, n);
+        let pixels = cmft_cross_pixels(n, vertical);
+        for &(x, y, c) in &pixels {
+            let want = [c[0], c[1], -c[2]];
+            let got = m
+                .direction(x, y)
+                .unwrap_or_else(|| panic!("{layout:?} ({x},{y}) unused"));
+            assert_dir(got, want, 1e-12, &format!("{layout:?} ({x},{y})"));
+        }
+        let used = (0..m.image.height)
+            .flat_map(|y| (0..m.image.width).map(move |x| (x, y)))
+            .filter(|&(x, y)| m.direction(x, y).is_some())
+            .count();
+        assert_eq!(used, pixels.len(), "{layout:?}");
+    }
+}
+
+/// cmft's `latLongFromVec`: its lat-long position (u, v) in [0, 1] of a direction.
+fn cmft_latlong_from_vec(d: [f64; 3]) -> [f64; 2] {
+    let d = unit(d);
+    let phi = d[2].atan2(-d[0]);
+    [(PI + phi) / (2.0 * PI), d[1].acos() / PI]
+}
+
+/// A cross that cmft makes from a lat-long (`imageCubemapFromLatLong`, then the cross) holds, in
+/// each pixel, the lat-long's value at `latLongFromVec` of cmft's direction; cmft's lat-long is
+/// a quarter turn from OpenEXR's, so read with `--rotation 90` the cross looks where the
+/// lat-long does (OpenEXR's `LatLongMap::latLong`, continuous).
+#[test]
+fn a_cross_cmft_made_from_a_latlong_reads_back_with_a_quarter_turn() {
+    let n = 6;
+    let turn = Orientation {
+        up: Up::Y,
+        rotation_deg: 90.0,
+    };
+    for (layout, vertical) in [(Layout::HCross, false), (Layout::VCross, true)] {
+        let m = map_of(layout, n);
+        for (x, y, c) in cmft_cross_pixels(n, vertical) {
+            let [cu, cv] = cmft_latlong_from_vec(c);
+            let w = turn.to_world(m.direction(x, y).unwrap());
+            let lon = w[0].atan2(w[2]);
+            let lat = w[1].atan2((w[0] * w[0] + w[2] * w[2]).sqrt());
+            let (u, v) = (0.5 - lon / (2.0 * PI), 0.5 - lat / PI);
+            let du = (u - cu).rem_euclid(1.0);
+            assert!(
+                du.min(1.0 - du) < 1e-9,
+                "{layout:?} ({x},{y}): u {u} vs cmft {cu}"
+            );
+            assert!(
+                (v - cv).abs() < 1e-9,
+                "{layout:?} ({x},{y}): v {v} vs cmft {cv}"
+            );
         }
     }
 }
@@ -427,10 +564,10 @@ fn crosses_are_seamless() {
         // 5 shared edges of n pixel pairs each.
         assert_eq!(edges, 5 * n, "{layout:?}");
     }
-    // The middle row reads like the lat-long: right of +Z is -X.
+    // The middle row turns as the lat-long does, seen from inside: right of -Z is +X.
     let m = map_of(Layout::HCross, n);
     let d = m.direction(2 * n + n / 2, n + n / 2).unwrap();
-    assert_dir(d, [-1.0, 0.0, 0.0], step, "right of +Z");
+    assert_dir(d, [1.0, 0.0, 0.0], step, "right of -Z");
 }
 
 // ---------------------------------------------------------------------------------------------

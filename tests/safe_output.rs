@@ -402,7 +402,8 @@ fn a_missing_input_is_reported_once() {
 }
 
 /// Starts a slow conversion into an empty folder, waits for its temporary file, sends `signal`,
-/// and checks the exit status and that the folder is empty again.
+/// and checks the exit status, the message naming the signal and the removed file, and that the
+/// folder is empty again.
 #[cfg(unix)]
 fn interrupted(signal: &str, code: i32) {
     let d = tempfile::tempdir().unwrap();
@@ -416,29 +417,40 @@ fn interrupted(signal: &str, code: i32) {
         .unwrap();
     // The writer's temporary file, once it holds data (not the empty probe made up front).
     let writing = || {
-        listing(d.path()).iter().any(|n| {
+        listing(d.path()).into_iter().find(|n| {
             n.ends_with(".tmp.exr")
                 && std::fs::metadata(d.path().join(n)).is_ok_and(|m| m.len() > 0)
         })
     };
     let t0 = std::time::Instant::now();
-    while !writing() {
+    let temp = loop {
+        if let Some(t) = writing() {
+            break t;
+        }
         assert!(
             t0.elapsed().as_secs() < 20,
             "no temporary file appeared in 20 s"
         );
         assert!(child.try_wait().unwrap().is_none(), "convert ended early");
         std::thread::sleep(std::time::Duration::from_millis(10));
-    }
+    };
     let sent = Command::new("kill")
         .args([signal, &child.id().to_string()])
         .status()
         .unwrap();
     assert!(sent.success());
-    let status = child.wait().unwrap();
-    assert!(!status.success());
-    assert_eq!(status.code(), Some(code), "{status:?}");
+    let done = child.wait_with_output().unwrap();
+    assert!(!done.status.success());
+    assert_eq!(done.status.code(), Some(code), "{:?}", done.status);
     assert!(listing(d.path()).is_empty(), "{:?}", listing(d.path()));
+    let stderr = String::from_utf8_lossy(&done.stderr);
+    let said = format!("interrupted by SIG{}: removed", &signal[1..]);
+    assert!(stderr.contains(&said), "{stderr}");
+    assert!(
+        stderr.contains(&d.path().join(&temp).display().to_string()),
+        "{temp} not named: {stderr}"
+    );
+    assert!(!stderr.contains("error"), "{stderr}");
 }
 
 #[cfg(unix)]
@@ -451,4 +463,10 @@ fn sigint_removes_the_temporary_file_and_exits_130() {
 #[test]
 fn sigterm_removes_the_temporary_file_and_exits_143() {
     interrupted("-TERM", 143);
+}
+
+#[cfg(unix)]
+#[test]
+fn sighup_removes_the_temporary_file_and_exits_129() {
+    interrupted("-HUP", 129);
 }

@@ -9,6 +9,13 @@ use specmap::spectrum::{Interpolation, Rule};
 use specmap::tradeoff::{choose_grid, Stimulus, Surface};
 
 #[derive(Debug, Args)]
+#[command(after_help = "\
+Examples:
+  specmap color D65                              # a light: XYZ (Y = 100), xy, CCT, RGB, CIELAB
+  specmap color colorchecker:red --under D65 --json
+  specmap color FL2 --range 380:780:5 --rule simpson --observer cie1964
+  specmap color lps --tolerance 0.5              # the coarsest step within 0.5 CIEDE2000
+  specmap color my_lamp.csv:spd --space rec2020")]
 pub struct ColorArgs {
     /// The spectrum: TABLE, TABLE:COLUMN or a CSV path. Alone it is a light (normalised to
     /// Y = 100); with --under it is a reflectance.

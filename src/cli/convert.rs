@@ -16,6 +16,17 @@ use std::io::IsTerminal;
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
+#[command(after_help = "\
+Layouts: latlong (2:1), cube (OpenEXR's N x 6N), hcross (4:3), vcross (3:4), hstrip (6:1),
+vstrip (1:6) and faces (six files); see the README's layout table for each face's orientation.
+
+Examples:
+  specmap convert envmaps/sunrise.exr -o sunrise.spectral.exr --light auto
+  specmap convert envmaps/forest.exr -o forest.exr --mode exact --precision float
+  specmap convert cross.hdr -o cube.exr --in-layout hcross --out-layout cube --size 256
+  specmap convert sky_{face}.exr -o sky.exr --in-layout faces
+  specmap convert blender.exr -o b.exr --up z --rotation 90
+  specmap convert envmaps/sunrise.exr -o s.exr --format basis --tolerance 0.5 --quiet")]
 pub struct ConvertArgs {
     /// Input map: OpenEXR or Radiance .hdr; with --in-layout faces, a pattern with {face}
     /// (px, nx, py, ny, pz, nz).
@@ -113,7 +124,7 @@ pub struct ConvertArgs {
     /// NaN and infinite pixels are an error (default: set to 0 and counted).
     #[arg(long)]
     strict: bool,
-    /// No progress bar.
+    /// Print nothing but errors: no progress bar, no summary (with --json, the JSON only).
     #[arg(long)]
     quiet: bool,
     /// Machine-readable summary.
@@ -387,6 +398,9 @@ pub fn run(a: ConvertArgs) -> anyhow::Result<()> {
     }
     if a.json {
         super::emit(&(serde_json::to_string_pretty(&report)? + "\n"));
+        return Ok(());
+    }
+    if a.quiet {
         return Ok(());
     }
     let r = &report;

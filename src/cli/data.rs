@@ -9,9 +9,20 @@ use specmap::plot::{self, Figure, Series};
 use specmap::spectrum::{Interpolation, Rule, Tabulated, WavelengthGrid};
 use std::path::PathBuf;
 
+/// The examples of `specmap data --help`; each subcommand shows its own.
+pub const EXAMPLES: &str = "\
+Examples:
+  specmap data list
+  specmap data show D65 --range 380:780:5 --plot d65.png
+  specmap data show colorchecker:red --format json";
+
 #[derive(Debug, Subcommand)]
 pub enum DataCommand {
     /// The built-in tables by kind (cmf, illuminant, light, reflectance).
+    #[command(after_help = "\
+Examples:
+  specmap data list
+  specmap data list --json")]
     List {
         /// Machine-readable output.
         #[arg(long)]
@@ -22,6 +33,12 @@ pub enum DataCommand {
 }
 
 #[derive(Debug, Args)]
+#[command(after_help = "\
+Examples:
+  specmap data show D65                          # the published table as CSV
+  specmap data show colorchecker:red --format json
+  specmap data show FL2 --range 380:780:1 --interp linear --plot fl2.svg
+  specmap data show my_lamp.csv --range 400:700:10")]
 pub struct ShowArgs {
     /// TABLE, TABLE:COLUMN or a CSV path.
     name: String,

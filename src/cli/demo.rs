@@ -11,7 +11,8 @@ use anyhow::Context;
 use clap::{Args, ValueEnum};
 use specmap::colorimetry::{Cmfs, Observer, RgbSpace};
 use specmap::envmap::convert::{self, ConvertOptions, ConvertReport, LightSpec};
-use specmap::envmap::roundtrip::{round_trip_file, write_heatmap, FileRoundTrip};
+use specmap::envmap::heatmap::{choose_range, write_heatmap, Scale};
+use specmap::envmap::roundtrip::{round_trip_file, FileRoundTrip};
 use specmap::envmap::{exrio, layout};
 use specmap::fit::{self, FitInput, Mode};
 use specmap::render::gpu::{AdapterReport, Gpu};
@@ -27,9 +28,6 @@ const DEFAULT_ENV: &str = "envmaps/sunrise.exr";
 
 /// The lights of the speed-for-accuracy table (smooth, incandescent, fluorescent, LED, a line).
 const TRADEOFF_LIGHTS: [&str; 6] = ["D65", "A", "FL2", "FL11", "LED-B3", "lps"];
-
-/// CIEDE2000 shown as white in the round-trip heatmaps (`specmap roundtrip`'s default).
-const HEATMAP_MAX: f32 = 5.0;
 
 #[derive(Debug, Args)]
 #[command(after_help = "\
@@ -557,13 +555,15 @@ fn convert_map(
         .with_context(|| format!("converting {input}"))?;
     let mut de = Vec::new();
     let round_trip = round_trip_file(&output, Observer::Cie1931, Rule::Riemann, Some(&mut de))?;
+    // `specmap roundtrip`'s default range: each map's own, stated on its image.
     let heatmap_path = dir.join(heatmap);
+    let range = choose_range(&de, Scale::Log, None, None)?;
     write_heatmap(
         &heatmap_path,
         round_trip.width,
         round_trip.height,
         &de,
-        HEATMAP_MAX,
+        &range,
     )?;
     let out = sh(&output.display().to_string());
     let mut command = format!("specmap convert {} -o {out} --light auto", sh(input));

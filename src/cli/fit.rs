@@ -10,6 +10,13 @@ use specmap::spectrum::Rule;
 use std::path::{Path, PathBuf};
 
 #[derive(Debug, Args)]
+#[command(after_help = "\
+Examples:
+  specmap fit --light D65                        # the paper's weights w_R, w_G, w_B
+  specmap fit --light FL2 --mode exact -o fit.json --plot basis.png
+  specmap fit --light D65,A,FL2,lps --mode paper,exact,nonneg   # a comparison table
+  specmap fit --light FL11 --rgb 1,0.5,0.2 --json
+  specmap fit --light my_lamp.csv:spd --space acescg --range 380:780:5")]
 pub struct FitArgs {
     /// The main light: a table name or CSV (e.g. D65, A, FL2, lps). Several, comma-separated,
     /// print a comparison table.

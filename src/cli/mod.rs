@@ -10,6 +10,7 @@ mod guard;
 mod render;
 mod rendition;
 mod roundtrip;
+pub mod runtime_dir;
 mod thinfilm;
 
 /// `writeln!` into a String (infallible).
@@ -57,11 +58,12 @@ enum Command {
     /// Colour error against time for every speed/accuracy knob: table, JSON and plots.
     Bench(bench::BenchArgs),
     /// List, print and plot the built-in spectral tables (and user CSVs).
-    #[command(subcommand)]
+    #[command(subcommand, after_help = data::EXAMPLES)]
     Data(data::DataCommand),
     /// Colour of a spectrum: XYZ (paper Eq. 10/11), xy, CCT, linear RGB, 8-bit sRGB, CIELAB.
     Color(color::ColorArgs),
-    /// Convert an RGB environment map (EXR/HDR, lat-long or cube) to a spectral OpenEXR.
+    /// Convert an RGB environment map (EXR/HDR: lat-long, cube, cross, strip or six face files)
+    /// to spectral OpenEXR.
     Convert(Box<convert::ConvertArgs>),
     /// Fit the paper's basis weights w_R, w_G, w_B for a main light; exact and non-negative modes.
     Fit(fit::FitArgs),
@@ -73,6 +75,16 @@ enum Command {
     Roundtrip(roundtrip::RoundtripArgs),
     /// Multilayer thin film: R and T spectra (paper Eq. 2-9, N layers) and the reflected colour.
     Thinfilm(thinfilm::ThinfilmArgs),
+}
+
+impl Cli {
+    /// Whether the command may open a GPU (and so load the Vulkan loader and its layers).
+    pub fn may_use_gpu(&self) -> bool {
+        matches!(
+            self.command,
+            Command::Demo(_) | Command::Bench(_) | Command::Render(_)
+        )
+    }
 }
 
 pub fn run(cli: Cli) -> anyhow::Result<()> {
@@ -256,5 +268,67 @@ pub fn emit(text: &str) {
         }
         eprintln!("error: writing to stdout: {e}");
         std::process::exit(1);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Cli;
+    use clap::{CommandFactory, Parser};
+
+    /// The `specmap ...` lines of a help text's "Examples:" section, comments removed.
+    fn examples(help: &str) -> Vec<String> {
+        let Some((_, section)) = help.split_once("Examples:\n") else {
+            return Vec::new();
+        };
+        section
+            .lines()
+            .take_while(|l| l.starts_with("  "))
+            .map(|l| l.split(" #").next().unwrap_or(l).trim().to_string())
+            .filter(|l| l.starts_with("specmap "))
+            .collect()
+    }
+
+    /// Every command and subcommand, as the words after `specmap`, with its long help.
+    fn commands(cmd: &clap::Command, path: &[String], out: &mut Vec<(Vec<String>, String)>) {
+        for sub in cmd.get_subcommands() {
+            let mut p = path.to_vec();
+            p.push(sub.get_name().to_string());
+            out.push((p.clone(), sub.clone().render_long_help().to_string()));
+            commands(sub, &p, out);
+        }
+    }
+
+    #[test]
+    fn every_command_shows_examples_that_parse() {
+        let mut root = Cli::command();
+        root.build();
+        let mut all = vec![(Vec::new(), root.clone().render_long_help().to_string())];
+        commands(&root, &[], &mut all);
+        let mut missing = Vec::new();
+        for (path, help) in all.iter().filter(|(p, _)| !p.iter().any(|c| c == "help")) {
+            let name = format!("specmap {}", path.join(" ")).trim_end().to_string();
+            let ex = examples(help);
+            // At least one example of the command itself (a step before it may show another).
+            if !ex.iter().any(|e| e.starts_with(&name)) {
+                missing.push(name.clone());
+            }
+            for e in ex {
+                if let Err(err) = Cli::try_parse_from(e.split_whitespace()) {
+                    panic!("the example `{e}` of `{name} --help` does not parse:\n{err}");
+                }
+            }
+        }
+        assert!(missing.is_empty(), "no examples in --help: {missing:?}");
+    }
+
+    #[test]
+    fn convert_summary_names_every_input_layout() {
+        let root = Cli::command();
+        let convert = root.find_subcommand("convert").unwrap();
+        let about = convert.get_about().unwrap().to_string();
+        for layout in ["lat-long", "cube", "cross", "strip", "six face files"] {
+            assert!(about.contains(layout), "{about}");
+        }
     }
 }

@@ -7,6 +7,12 @@ use specmap::rendition::{compare, map_irradiance, MapSummary, Normal, RenditionO
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
+#[command(after_help = "\
+Examples:
+  specmap convert tests/data/truth/interior_fl2.rgb.exr -o fl2.exr --light auto
+  specmap rendition tests/data/truth/interior_fl2.spectral.exr fl2.exr
+  specmap rendition truth.spectral.exr converted.exr --normals up,px,nx,pz,nz --json
+  specmap rendition truth.spectral.exr converted.exr --normals 0:1:1 --patches my_patches.csv")]
 pub struct RenditionArgs {
     /// The truth: a spectral OpenEXR (Fichet 2021 layout) whose spectra are known.
     truth: PathBuf,

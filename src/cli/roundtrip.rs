@@ -1,20 +1,34 @@
 //! `specmap roundtrip`: integrate a spectral EXR back to RGB and compare with its RGB preview.
 
 use super::{outln, ObserverArg, RuleArg};
-use clap::Args;
-use specmap::envmap::roundtrip::{round_trip_file, write_heatmap};
+use clap::{Args, ValueEnum};
+use specmap::envmap::heatmap::{caption, check_bounds, choose_range, write_heatmap, Scale};
+use specmap::envmap::roundtrip::round_trip_file;
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
+#[command(after_help = "\
+Examples:
+  specmap convert envmaps/sunrise.exr -o sunrise.spectral.exr
+  specmap roundtrip sunrise.spectral.exr
+  specmap roundtrip sunrise.spectral.exr --heatmap roundtrip.png --json
+  specmap roundtrip sunrise.spectral.exr --observer cie1964 --rule simpson")]
 pub struct RoundtripArgs {
     /// A spectral OpenEXR (from `specmap convert`, or any Fichet-layout file with R, G, B).
     file: PathBuf,
-    /// Write a per-pixel CIEDE2000 heatmap (PNG; white at --heatmap-max and above).
+    /// Write a per-pixel CIEDE2000 heatmap (PNG) with its colour bar and range beneath it.
     #[arg(long, value_name = "OUT.png")]
     heatmap: Option<PathBuf>,
-    /// CIEDE2000 shown as white in the heatmap.
-    #[arg(long, default_value_t = 5.0)]
-    heatmap_max: f32,
+    /// The heatmap's colour scale.
+    #[arg(long, value_enum, default_value_t = ScaleArg::Log)]
+    heatmap_scale: ScaleArg,
+    /// CIEDE2000 shown as black in the heatmap [default: log: the 1st percentile of the pixels'
+    /// errors, rounded down to 1, 2 or 5 x 10^k and at least a decade below the top; linear: 0].
+    #[arg(long, value_name = "DE")]
+    heatmap_min: Option<f64>,
+    /// CIEDE2000 shown as white [default: the 99.9th percentile, rounded up to 1, 2 or 5 x 10^k].
+    #[arg(long, value_name = "DE")]
+    heatmap_max: Option<f64>,
     /// Standard observer.
     #[arg(long, value_enum, default_value_t = ObserverArg::Cie1931)]
     observer: ObserverArg,
@@ -26,13 +40,31 @@ pub struct RoundtripArgs {
     json: bool,
 }
 
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum ScaleArg {
+    /// equal ratios of CIEDE2000 get equal lengths of the bar (errors span decades)
+    Log,
+    /// equal differences get equal lengths
+    Linear,
+}
+
 pub fn run(a: RoundtripArgs) -> anyhow::Result<()> {
-    if !(a.heatmap_max.is_finite() && a.heatmap_max > 0.0) {
-        anyhow::bail!(
-            "--heatmap-max {}: the CIEDE2000 shown as white must be positive",
+    let scale = match a.heatmap_scale {
+        ScaleArg::Log => Scale::Log,
+        ScaleArg::Linear => Scale::Linear,
+    };
+    // Checked before any work: the bounds alone (the range itself needs the pixels).
+    check_bounds(scale, a.heatmap_min, a.heatmap_max).map_err(|e| {
+        anyhow::anyhow!(
+            "--heatmap-min {} --heatmap-max {}: {e}",
+            a.heatmap_min
+                .map(|v| v.to_string())
+                .unwrap_or("auto".into()),
             a.heatmap_max
-        );
-    }
+                .map(|v| v.to_string())
+                .unwrap_or("auto".into())
+        )
+    })?;
     let mut guard = super::guard::Guard::new();
     guard.input("", &a.file);
     if let Some(p) = &a.heatmap {
@@ -55,8 +87,10 @@ pub fn run(a: RoundtripArgs) -> anyhow::Result<()> {
         a.heatmap.as_ref().map(|_| &mut de),
     )?;
     if let Some(path) = &a.heatmap {
-        write_heatmap(path, r.width, r.height, &de, a.heatmap_max)?;
-        eprintln!("wrote {}", path.display());
+        let range = choose_range(&de, scale, a.heatmap_min, a.heatmap_max)?;
+        let drawn = write_heatmap(path, r.width, r.height, &de, &range)?;
+        let [range, counts] = caption(&drawn);
+        eprintln!("wrote {}: {range}; {counts}", path.display());
     }
     if a.json {
         super::emit(&(serde_json::to_string_pretty(&r)? + "\n"));

@@ -20,18 +20,22 @@
 //! covers an equal share of its row / face and the pixels tile the sphere exactly, which the
 //! solid angles and the filtered resampling rely on. Orientation is exactly OpenEXR's.
 //!
-//! **Crosses and strips** use the cell arrangement of cmft (dariomanesku/cmft,
-//! `src/cmft/cubemaputils.h`, the cross diagram above `s_cubeFaceNeighbours`) that Blender and
-//! Unity share: horizontal cross 4N x 3N with one face above and one below the second cell of the
-//! middle row; vertical cross 3N x 4N, the same with the fourth middle-row face moved below,
-//! rotated 180°. The cross is seamless and every side face appears as seen from inside the cube
-//! with Y up. cmft's face frame (`s_faceUvVectors`, the OpenGL/Direct3D cube-map convention) is
-//! left-handed; in OpenEXR's right-handed world, looking at +Z from inside, −X is on the right.
-//! So, to keep OpenEXR's orientation *and* a seamless, unmirrored cross, the middle row here is
-//! **+X, +Z, −X, −Z** (cmft's image with its X labels read as OpenEXR's −X, i.e. `x -> -x`):
-//! +Z and −Z (and all four side faces) hold exactly OpenEXR's cube-face images; +Y (above +Z) and
-//! −Y (below +Z) are OpenEXR's faces rotated 180° so that their edges meet +Z's. Strips hold the
-//! six faces in +X, −X, +Y, −Y, +Z, −Z order, each oriented as in the horizontal cross.
+//! **Every face of every cube-like layout has OpenEXR's cube-face orientation** (the images of
+//! `CubeMap`'s faces); the layouts differ only in where the faces sit:
+//!
+//! - **Strips** hold the six faces in OpenEXR's order +X, −X, +Y, −Y, +Z, −Z, side by side
+//!   (horizontal, 6N x N) or stacked (vertical, N x 6N: pixel for pixel OpenEXR's cube).
+//! - **Crosses** use the cells of cmft (dariomanesku/cmft, commit cad5f31b: `imageCubemapFromCross`
+//!   in `src/cmft/image.cpp`, the diagram above `s_faceUvVectors` in `src/cmft/cubemaputils.h`):
+//!   horizontal cross 4N x 3N, a middle row of four faces with one face above and one below its
+//!   second cell; vertical cross 3N x 4N, the same with the fourth middle-row face moved below,
+//!   turned 180°. cmft's face frame (`s_faceUvVectors`, the OpenGL/Direct3D cube-map convention)
+//!   is left-handed: with z negated, each of its face images is exactly OpenEXR's face of that
+//!   axis (cmft's "+Z" face is OpenEXR's −Z). Read so, the middle row is **−X, −Z, +X, +Z**, with
+//!   +Y above and −Y below −Z, every face as in OpenEXR's cube (the vertical cross's +Z, below −Y,
+//!   turned 180° as cmft turns it); no other placement of OpenEXR's unturned faces in these cells
+//!   is seamless. cmft's own lat-long is a quarter turn from OpenEXR's: a cross that cmft makes
+//!   from a lat-long reads back as that lat-long with `--rotation 90`.
 
 use crate::envmap::RgbImage;
 use crate::error::{Error, Result};
@@ -240,40 +244,34 @@ const CUBE: [Slot; 6] = [
     slot(0, 4, NX, NY),
     slot(0, 5, PX, NY),
 ];
-/// Horizontal cross: middle row +X, +Z, −X, −Z; +Y above and −Y below +Z.
+/// Horizontal cross: middle row −X, −Z, +X, +Z; +Y above and −Y below −Z; OpenEXR's faces.
 const HCROSS: [Slot; 6] = [
-    slot(0, 1, PZ, NY),
-    slot(2, 1, NZ, NY),
-    slot(1, 0, NX, PZ),
-    slot(1, 2, NX, NZ),
-    slot(1, 1, NX, NY),
-    slot(3, 1, PX, NY),
-];
-/// Vertical cross: as the horizontal one, with −Z below −Y, rotated 180°.
-const VCROSS: [Slot; 6] = [
-    slot(0, 1, PZ, NY),
-    slot(2, 1, NZ, NY),
-    slot(1, 0, NX, PZ),
-    slot(1, 2, NX, NZ),
-    slot(1, 1, NX, NY),
-    slot(1, 3, NX, PY),
-];
-const HSTRIP: [Slot; 6] = [
-    slot(0, 0, PZ, NY),
-    slot(1, 0, NZ, NY),
-    slot(2, 0, NX, PZ),
-    slot(3, 0, NX, NZ),
-    slot(4, 0, NX, NY),
-    slot(5, 0, PX, NY),
-];
-const VSTRIP: [Slot; 6] = [
-    slot(0, 0, PZ, NY),
+    slot(2, 1, PZ, NY),
     slot(0, 1, NZ, NY),
-    slot(0, 2, NX, PZ),
-    slot(0, 3, NX, NZ),
-    slot(0, 4, NX, NY),
-    slot(0, 5, PX, NY),
+    slot(1, 0, PX, NZ),
+    slot(1, 2, PX, PZ),
+    slot(3, 1, NX, NY),
+    slot(1, 1, PX, NY),
 ];
+/// Vertical cross: as the horizontal one, with +Z below −Y, turned 180°.
+const VCROSS: [Slot; 6] = {
+    let mut v = HCROSS;
+    v[4] = slot(1, 3, PX, PY);
+    v
+};
+/// Horizontal strip: OpenEXR's faces side by side, in its order, each as in the cube.
+const HSTRIP: [Slot; 6] = {
+    let mut h = CUBE;
+    let mut i = 0;
+    while i < 6 {
+        h[i].col = i;
+        h[i].row = 0;
+        i += 1;
+    }
+    h
+};
+/// Vertical strip: OpenEXR's cube.
+const VSTRIP: [Slot; 6] = CUBE;
 
 impl Layout {
     /// Every layout.

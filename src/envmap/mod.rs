@@ -5,6 +5,7 @@ pub mod carriers;
 pub mod convert;
 pub mod engine;
 pub mod exrio;
+pub mod heatmap;
 pub mod input;
 pub mod layout;
 pub mod light;

@@ -86,7 +86,8 @@ fn read_mask(path: &Path, name: &str) -> Option<Vec<f32>> {
 }
 
 /// Integrates every pixel's spectrum back to RGB and compares it with the preview channels.
-/// `heatmap`, if given, receives the per-pixel CIEDE2000 (row-major).
+/// `heatmap`, if given, receives the per-pixel CIEDE2000 (row-major; NaN for a pixel not
+/// compared), for [`crate::envmap::heatmap::write_heatmap`].
 pub fn round_trip_file(
     path: &Path,
     observer: Observer,
@@ -183,7 +184,7 @@ pub fn round_trip_file(
     let mut missing_rgb = false;
     if let Some(h) = heatmap.as_deref_mut() {
         h.clear();
-        h.resize(width * height, 0.0);
+        h.resize(width * height, f32::NAN);
     }
     let info = read_spectral_rows(path, |y, row| {
         let per = row.len() / width.max(1);
@@ -254,31 +255,4 @@ pub fn round_trip_file(
         sun_pixels,
         non_finite_pixels,
     })
-}
-
-/// Writes a CIEDE2000 heatmap as an sRGB PNG: black at 0, through red and yellow, white at
-/// `max_de` and above.
-pub fn write_heatmap(
-    path: &Path,
-    width: usize,
-    height: usize,
-    de: &[f32],
-    max_de: f32,
-) -> Result<()> {
-    let mut img = image::RgbImage::new(width as u32, height as u32);
-    for (i, px) in img.pixels_mut().enumerate() {
-        let t = (de[i] / max_de).clamp(0.0, 1.0);
-        // A simple "hot" colour map.
-        let r = (3.0 * t).min(1.0);
-        let g = (3.0 * t - 1.0).clamp(0.0, 1.0);
-        let b = (3.0 * t - 2.0).clamp(0.0, 1.0);
-        *px = image::Rgb([r, g, b].map(|v| (v * 255.0).round() as u8));
-    }
-    let tmp = crate::io::temp_path_for(path)?;
-    img.save_with_format(&tmp, image::ImageFormat::Png)
-        .map_err(|e| {
-            crate::io::discard_temp(&tmp);
-            Error::invalid(format!("{}: cannot write the heatmap: {e}", path.display()))
-        })?;
-    crate::io::rename_into_place(&tmp, path)
 }

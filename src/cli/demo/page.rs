@@ -288,11 +288,10 @@ fn convert_section(o: &mut String, run: &Run) {
         "<p><code>{}</code> becomes a spectral OpenEXR (one channel per wavelength, an RGB \
          preview and a sun mask) with the main light chosen from the scene and the sun given its \
          own SPD. The heatmaps integrate each pixel's spectrum back to RGB and compare it with \
-         the original: black is 0, white is ΔE00 {} or more. In exact mode only the sun, \
-         replaced by its SPD, differs; the paper's three weights desaturate every coloured \
-         pixel.</p>",
+         the original (ΔE00); each has its own colour scale, drawn beneath it with the range it \
+         spans. In exact mode only the sun, replaced by its SPD, differs; the paper's three \
+         weights desaturate every coloured pixel.</p>",
         esc(&run.env),
-        super::HEATMAP_MAX
     );
     for (c, what) in [
         (&run.converted, "exact mode (the default)"),
