@@ -10,6 +10,7 @@ pub mod input;
 pub mod layout;
 pub mod light;
 pub mod metric;
+pub mod overlay;
 pub mod plan;
 pub mod roundtrip;
 pub mod scene;

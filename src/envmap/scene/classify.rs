@@ -153,6 +153,15 @@ pub fn classify(
             .push(sun_light(cells, levels, &candidates[k], settings)?);
     }
     let mut sky_cells = daylight_lights(cells, levels, &candidates, &daylight, &dim, &mut out)?;
+    // The sun's glow above the horizon, where daylight-coloured, is circumsolar sky.
+    if let (Some(k), false) = (sun_index, sky_cells.is_empty()) {
+        let sun_cells = &out.lights[0].cells;
+        sky_cells.extend(candidates[k].e.cells.iter().copied().filter(|i| {
+            sun_cells.binary_search(i).is_err()
+                && cells.direction(*i)[1] > 0.0
+                && daylight_coloured(&cells.xyz(*i))
+        }));
+    }
     for &(k, _) in &daylight {
         taken[k] = true;
     }
