@@ -334,3 +334,38 @@ fn two_shards_under_gnu_parallel_convert_every_map_once() {
         "{stdout}"
     );
 }
+
+/// The Slurm array script, run as two array tasks would run it (no Slurm needed: it reads the
+/// task's variables), converts every map once between them.
+#[cfg(unix)]
+#[test]
+fn the_slurm_array_script_gives_each_task_its_share() {
+    let d = tempfile::tempdir().unwrap();
+    let lib = d.path().join("lib");
+    for i in 0..3 {
+        map(&lib.join(format!("m{i}.exr")), i, 32);
+    }
+    let out = d.path().join("out");
+    let script =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("integrations/slurm/specmap-batch.sbatch");
+    for task in ["0", "1"] {
+        let run = Command::new("bash")
+            .arg(&script)
+            .args([s(&lib), s(&out), "--range", "400:700:20"])
+            .env("SPECMAP", env!("CARGO_BIN_EXE_specmap"))
+            .env("SLURM_ARRAY_TASK_ID", task)
+            .env("SLURM_ARRAY_TASK_COUNT", "2")
+            .env("SLURM_CPUS_PER_TASK", "1")
+            .output()
+            .unwrap();
+        assert!(
+            run.status.success(),
+            "{}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+    }
+    let st = statuses(&out);
+    assert_eq!(st.len(), 3, "{st:?}");
+    assert!(st.values().all(|&n| n == 1), "{st:?}");
+    assert!(out.join("specmap-batch.shard-1-of-2.jsonl").is_file());
+}
