@@ -10,6 +10,7 @@ use crate::envmap::exrio::{
 };
 use crate::envmap::layout::{detect, EnvMap, Layout, Orientation};
 use crate::envmap::light::{self, LightChoice, WhiteChoice};
+use crate::envmap::planes::{self, RowMut, SpectralRows};
 use crate::envmap::sun::{find_sun, SunSearch, SunSettings};
 use crate::error::{Error, Result};
 use crate::fit::{self, Fit, FitInput, Mode};
@@ -775,72 +776,78 @@ pub fn convert(
 
     // Stream blocks of rows, computed in parallel.
     let t1 = Instant::now();
-    // Rows are computed, then written, a batch at a time: whole compression blocks, enough for
-    // the writer to compress them in parallel, within BATCH_BYTES.
+    // Rows are computed a batch at a time, the next while the writer compresses the last:
+    // whole compression blocks, enough for the writer to compress them in parallel, within
+    // BATCH_BYTES (of f32 pixels; the coefficient planes of two batches take a third of it).
     let lines = opts.compression.lines_per_block();
     let block_bytes = lines * width * per_pixel * std::mem::size_of::<f32>();
     let blocks = (BATCH_BYTES / block_bytes.max(1)).clamp(1, height.div_ceil(lines));
     let rows_per_block = (blocks * lines).max(16).min(height);
-    let mut buffer = vec![0f32; rows_per_block * width * per_pixel];
+    // The bands as coefficients of the engine's spectra; R, G, B and the sun mask (or the
+    // basis format's coefficients) as the channels after them.
+    let written_bands = per_pixel - 4;
+    let new_batch = || {
+        SpectralRows::new(
+            engine.spectra_table(),
+            written_bands,
+            4,
+            width,
+            rows_per_block,
+        )
+    };
+    let mut planes = [new_batch(), new_batch()];
+    let fill = |y: usize, mut row: RowMut| {
+        let (mut a, mut b) = (Accumulator::default(), Accumulator::default());
+        let mut count = SpectraCount::default();
+        // The spectrum itself is only looked at (negative values, the round trip).
+        let mut scratch = vec![0f32; bands];
+        for x in 0..width {
+            let i = y * width + x;
+            let rgb = map.image.pixels[i];
+            let kind = kinds[i];
+            let is_sun = kind == PixelKind::Sun;
+            let r = engine.spectrum(rgb, kind, &mut scratch);
+            let extra = match opts.format {
+                OutputFormat::Spectral => {
+                    row.set(x, &r.combination);
+                    [rgb[0], rgb[1], rgb[2], is_sun as u8 as f32]
+                }
+                OutputFormat::Basis => engine.coefficients(rgb, is_sun).map(|c| c as f32),
+            };
+            for (e, v) in extra.into_iter().enumerate() {
+                row.set_extra(e, x, v);
+            }
+            count.add(r.took, r.negative);
+            let back = r.rgb_back;
+            let omega = map.solid_angle(x, y);
+            let lum = engine.luminance(rgb);
+            if lum > 0.0 && omega > 0.0 {
+                let de = engine.round_trip_error(rgb, back);
+                a.add(de, lum * omega);
+                if !is_sun {
+                    b.add(de, lum * omega);
+                }
+            }
+        }
+        (a, b, count)
+    };
+    let stats = planes::stream(
+        &mut planes,
+        height,
+        rows_per_block,
+        &fill,
+        &mut |y0, rows, batch| {
+            writer.write_lines(y0, rows, batch)?;
+            progress(y0 + rows, height);
+            Ok(())
+        },
+    )?;
     let (mut all, mut no_sun) = (Accumulator::default(), Accumulator::default());
     let mut spectra = SpectraCount::default();
-    let mut y0 = 0;
-    while y0 < height {
-        let rows = rows_per_block.min(height - y0);
-        let buf = &mut buffer[..rows * width * per_pixel];
-        let stats: Vec<(Accumulator, Accumulator, SpectraCount)> = buf
-            .par_chunks_mut(width * per_pixel)
-            .enumerate()
-            .map(|(r, row)| {
-                let y = y0 + r;
-                let (mut a, mut b) = (Accumulator::default(), Accumulator::default());
-                let mut count = SpectraCount::default();
-                // The basis format writes coefficients; the round trip still needs the spectrum.
-                let mut scratch = vec![0f32; bands];
-                for x in 0..width {
-                    let i = y * width + x;
-                    let rgb = map.image.pixels[i];
-                    let kind = kinds[i];
-                    let is_sun = kind == PixelKind::Sun;
-                    let out = &mut row[x * per_pixel..(x + 1) * per_pixel];
-                    let r = match opts.format {
-                        OutputFormat::Spectral => {
-                            let r = engine.spectrum(rgb, kind, &mut out[..bands]);
-                            out[bands..bands + 3].copy_from_slice(&rgb);
-                            out[bands + 3] = is_sun as u8 as f32;
-                            r
-                        }
-                        OutputFormat::Basis => {
-                            let c = engine.coefficients(rgb, is_sun);
-                            for k in 0..4 {
-                                out[k] = c[k] as f32;
-                            }
-                            engine.spectrum(rgb, kind, &mut scratch)
-                        }
-                    };
-                    count.add(r.took, r.negative);
-                    let back = r.rgb_back;
-                    let omega = map.solid_angle(x, y);
-                    let lum = engine.luminance(rgb);
-                    if lum > 0.0 && omega > 0.0 {
-                        let de = engine.round_trip_error(rgb, back);
-                        a.add(de, lum * omega);
-                        if !is_sun {
-                            b.add(de, lum * omega);
-                        }
-                    }
-                }
-                (a, b, count)
-            })
-            .collect();
-        for (a, b, c) in stats {
-            all.merge(&a);
-            no_sun.merge(&b);
-            spectra.merge(&c);
-        }
-        writer.write_rows(y0, buf)?;
-        y0 += rows;
-        progress(y0, height);
+    for (a, b, c) in stats {
+        all.merge(&a);
+        no_sun.merge(&b);
+        spectra.merge(&c);
     }
     let seconds_encode = writer.encode_seconds();
     let bytes = writer.finish()?;

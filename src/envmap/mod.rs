@@ -1,11 +1,13 @@
 //! Environment maps: layouts and directions, EXR and HDR I/O, sun detection, and the conversion
 //! of RGB maps to spectral ones.
 
+pub mod block;
 pub mod convert;
 pub mod engine;
 pub mod exrio;
 pub mod layout;
 pub mod light;
+pub mod planes;
 pub mod roundtrip;
 pub mod sun;
 pub mod zip;
