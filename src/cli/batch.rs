@@ -79,6 +79,8 @@ pub fn run(a: BatchArgs) -> anyhow::Result<()> {
         guard.input("--fit", p);
     }
     guard.folder("--out-dir", &a.out_dir).check()?;
+    std::fs::create_dir_all(&a.out_dir)
+        .with_context(|| format!("--out-dir {}: creating the folder", a.out_dir.display()))?;
     let suffix = match opts.format {
         OutputFormat::Spectral => batch::OUTPUT_SUFFIX_SPECTRAL,
         OutputFormat::Basis => batch::OUTPUT_SUFFIX_BASIS,
