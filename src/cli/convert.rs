@@ -237,6 +237,11 @@ enum CompressionArg {
 }
 
 impl ConvertOptionArgs {
+    /// The input is six face files named by a `{face}` pattern.
+    pub fn faces(&self) -> bool {
+        matches!(self.in_layout, InLayout::Faces)
+    }
+
     /// The `--fit` file, an input of the command.
     pub fn fit_file(&self) -> Option<&std::path::Path> {
         self.fit.as_deref()

@@ -1,5 +1,6 @@
 //! Flag definitions and the dispatch to each command.
 
+mod batch;
 mod bench;
 mod color;
 mod convert;
@@ -37,6 +38,7 @@ Examples:
   specmap color my_lamp.csv
   specmap convert envmaps/sunrise.exr -o sunrise.spectral.exr
   specmap inspect envmaps/sunrise.exr --overlay lights.png
+  specmap batch envmaps --out-dir spectral --jobs 2
   specmap fit --light FL2 --mode exact -o fit.json --plot basis.png
   specmap rendition truth.spectral.exr converted.exr --normals up,px,nx,pz,nz
   specmap thinfilm --layers 2.7:270 --substrate 1.45 --json
@@ -70,6 +72,9 @@ enum Command {
     /// The lights a map holds (sun, sky, windows, lamps) and the conversion's plan, drawn over
     /// the map if asked; writes no spectral file.
     Inspect(Box<inspect::InspectArgs>),
+    /// Convert a library of maps (files, folders, lists) into one folder: resumable, shardable.
+    #[command(after_help = batch::AFTER_HELP)]
+    Batch(Box<batch::BatchArgs>),
     /// Fit the paper's basis weights w_R, w_G, w_B for a main light; exact and non-negative modes.
     Fit(fit::FitArgs),
     /// Spectral preview render (Eq. 1 Phong, thin films) of the paper's scenes, GPU or CPU.
@@ -99,6 +104,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Data(c) => data::run(c),
         Command::Color(a) => color::run(a),
         Command::Convert(a) => convert::run(*a),
+        Command::Batch(a) => batch::run(*a),
         Command::Fit(a) => fit::run(a),
         Command::Inspect(a) => inspect::run(*a),
         Command::Render(a) => render::run(*a),
