@@ -613,3 +613,87 @@ fn quiet_prints_nothing_but_errors() {
     let err = String::from_utf8_lossy(&bad.stderr);
     assert!(err.starts_with("error: --rotation inf"), "{err}");
 }
+
+/// The `sun` channel of a spectral file as stored (no EV applied).
+fn stored_channel(path: &Path, name: &str) -> Vec<f32> {
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_file(path)
+        .unwrap();
+    image
+        .layer_data
+        .channel_data
+        .list
+        .iter()
+        .find(|c| c.name == *name)
+        .expect("the channel")
+        .sample_data
+        .values_as_f32()
+        .collect()
+}
+
+/// Half precision loses nothing silently: the EV scale leaves the sun mask 0/1 (roundtrip still
+/// finds the sun), and a scale that would flush dim pixels to zero makes the file float.
+#[test]
+fn the_ev_scale_keeps_the_sun_mask_and_never_flushes_pixels() {
+    let d = tempfile::tempdir().unwrap();
+    // A blue sky and a sun of 200000: beyond half's 65504, so EV > 0.
+    let input = d.path().join("bright.exr");
+    write_rgb(&input, 128, 64, |x, y| {
+        if (x, y) == (64, 20) {
+            [200000.0, 190000.0, 170000.0]
+        } else if y < 32 {
+            [0.5, 0.7, 1.0]
+        } else {
+            [0.2, 0.2, 0.2]
+        }
+    });
+    let out = d.path().join("bright.spectral.exr");
+    let o = out.to_str().unwrap();
+    let r = convert_json(&[input.to_str().unwrap(), "-o", o, "--quiet"]);
+    assert_eq!(r["precision"], "half");
+    assert!(r["ev"].as_f64().unwrap() >= 1.0, "{}", r["ev"]);
+    assert_eq!(r["sun"]["found"], true, "{}", r["sun"]);
+    let mask = stored_channel(&out, "sun");
+    assert!(mask.iter().all(|&v| v == 0.0 || v == 1.0));
+    assert!(mask.iter().filter(|&&v| v == 1.0).count() >= 1);
+    let rt = specmap(&["roundtrip", o, "--json"]);
+    assert!(
+        rt.status.success(),
+        "{}",
+        String::from_utf8_lossy(&rt.stderr)
+    );
+    let rt: serde_json::Value = serde_json::from_slice(&rt.stdout).unwrap();
+    assert!(rt["sun_pixels"].as_u64().unwrap() >= 1, "{rt}");
+    // A sun of 1e9 needs EV 14, which would flush pixels of 1e-4 (below 2^-25 after the scale):
+    // the file is written as float instead, and the report says why.
+    let input = d.path().join("extreme.exr");
+    write_rgb(&input, 128, 64, |x, y| {
+        if (x, y) == (64, 20) {
+            [1e9, 1e9, 1e9]
+        } else if y < 32 {
+            [0.5, 0.7, 1.0]
+        } else {
+            [1e-4, 1e-4, 1e-4]
+        }
+    });
+    std::fs::remove_file(&out).unwrap();
+    let r = convert_json(&[input.to_str().unwrap(), "-o", o, "--quiet"]);
+    assert_eq!(r["precision"], "float", "{}", r["notes"]);
+    assert!(r["ev"].is_null());
+    assert!(
+        r["notes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|n| n.as_str().unwrap().contains("flush")),
+        "{}",
+        r["notes"]
+    );
+    let dark = stored_channel(&out, "S0.550,000000nm");
+    assert!(dark.iter().all(|&v| v > 0.0), "no pixel is written as 0");
+}

@@ -1,8 +1,12 @@
-//! The default conversion against the ground-truth scenes of `tests/data/truth` (issue 8, part 5):
-//! each RGB map converted in-process, then `specmap::rendition` against its true spectra.
-//! Targets: mean rendition CIEDE2000 under 0.6 on the clear skies, under 1.0 for the fluorescent
-//! interiors with the right light, under 1.5 for the sodium street with `--light auto`, and the
-//! white within 0.5 everywhere. `tools/rendition_table.py` prints the same numbers as a table.
+//! The default conversion against the ground-truth scenes of `tests/data/truth` (issue 8, part 5,
+//! and issue 13): each RGB map converted in-process, then `specmap::rendition` against its true
+//! spectra. Targets: mean rendition CIEDE2000 under 0.6 on the clear skies, under 1.0 for the
+//! fluorescent interiors, under 1.5 for the sodium street, and the white within 0.5 everywhere;
+//! for the scenes of several lights (lit by measured lamps the converter does not match against)
+//! under 0.6 for the street and the yard, under 0.4 for the incandescent room given
+//! `--light A --white light`; the mixed office stays under 0.7 (its 0.6 target is not met: the
+//! nearest catalogue tube, FL11, renders the ColorChecker 0.6 from the true f32t8-tl841 by
+//! itself, `tools/lamp_rendition.py`). `tools/rendition_table.py` prints the same numbers.
 
 use specmap::envmap::convert::{convert, ConvertOptions, LightSpec, Method, SunSpd, WhiteSpec};
 use specmap::fit::Mode;
@@ -81,6 +85,30 @@ fn the_default_renders_fluorescent_interiors_within_the_targets_with_the_right_l
         };
         within(measure(d.path(), name, &opts), 1.0, name);
     }
+}
+
+#[test]
+fn the_default_renders_scenes_of_several_lights_within_the_targets() {
+    let d = tempfile::tempdir().unwrap();
+    for (name, mean) in [
+        ("street_mixed", 0.6),
+        ("yard_overcast", 0.6),
+        ("office_mixed", 0.7),
+    ] {
+        within(
+            measure(d.path(), name, &ConvertOptions::faithful()),
+            mean,
+            name,
+        );
+    }
+    // A room white-balanced to its bulbs: said so, and the bulbs named (A for 60w-soft-white).
+    let opts = ConvertOptions {
+        light: LightSpec::Named("A".into()),
+        white: Some(WhiteSpec::Light),
+        ..ConvertOptions::faithful()
+    };
+    let r = measure(d.path(), "room_incandescent_dusk", &opts);
+    assert!(r.mean_de2000 < 0.4, "room: mean {}", r.mean_de2000);
 }
 
 #[test]

@@ -44,7 +44,7 @@ GROUPS = {
     "warm LED": (["luxeon-ww-2880", "phos-1", "phos-3", "4-led-1"],
                  [("illuminant", n) for n in ("LED-B1", "LED-B2", "LED-BH1", "LED-V1", "LED-RGB1")]),
     "4000 K": (["f32t8-tl841", "tl84", "t8-polylux-4000", "cool-white-fl", "mhc100-u-mp-4k"],
-               [("illuminant", n) for n in ("FL11", "FL9", "FL6", "FL2", "LED-B3", "HP4")]
+               [("illuminant", n) for n in ("FL11", "FL3.8", "FL3.5", "FL9", "FL6", "FL2", "LED-B3", "HP4")]
                + [("light", "mercury")]),
 }
 

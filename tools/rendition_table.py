@@ -25,7 +25,11 @@ TARGET = pathlib.Path(os.environ.get("CARGO_TARGET_DIR", ROOT / "target"))
 BIN = os.environ.get("SPECMAP_BIN", str(TARGET / "debug" / "specmap"))
 TRUTH = ROOT / "tests" / "data" / "truth"
 
-RIGHT = {"interior_fl2": "FL2", "interior_fl11": "FL11", "street_hps": "hps"}
+RIGHT = {"interior_fl2": "FL2", "interior_fl11": "FL11", "street_hps": "hps",
+         # The scenes of several lights: the light of the most energy (the tubes, the sodium
+         # lamps, the bulbs as A), or daylight.
+         "office_mixed": "FL11", "street_mixed": "hps", "room_incandescent_dusk": "A",
+         "yard_overcast": "D65"}
 # paper/exact/nonneg keep the paper's sun (D65), sky (the light's basis) and, with a named light,
 # its white premise (RGB (1,1,1) is the main light), so these are the methods as they were.
 CONFIGS = [

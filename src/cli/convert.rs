@@ -61,6 +61,10 @@ pub struct ConvertOptionArgs {
     /// energy).
     #[arg(long, value_enum, default_value_t = ReflectorsArg::Local)]
     reflectors: ReflectorsArg,
+    /// With --reflectors local: how strongly each reflector's mix is pulled towards the global
+    /// one (0: its surroundings' colour alone).
+    #[arg(long, value_name = "W", default_value_t = specmap::envmap::scene::reflectors::LOCAL_PRIOR)]
+    reflector_prior: f64,
     /// What RGB (1,1,1) is: `light` (the map is white-balanced to its main light, the paper's
     /// premise), `d65` (D65-referenced: a sodium lamp looks orange), or `auto` (the brightest
     /// regions decide). Default: auto, except `light` for paper/exact/nonneg with a named light.
@@ -256,6 +260,12 @@ impl ConvertOptionArgs {
                 a.rotation
             );
         }
+        if !(a.reflector_prior.is_finite() && (0.0..=100.0).contains(&a.reflector_prior)) {
+            anyhow::bail!(
+                "--reflector-prior {}: a weight from 0 to 100",
+                a.reflector_prior
+            );
+        }
         if let Some(n) = a.size {
             if n > MAX_SIZE {
                 anyhow::bail!(
@@ -289,7 +299,9 @@ impl ConvertOptionArgs {
                 LightsArg::One => Lights::One,
             },
             reflectors: match a.reflectors {
-                ReflectorsArg::Local => ReflectorModel::Local,
+                ReflectorsArg::Local => ReflectorModel::Local {
+                    prior: a.reflector_prior,
+                },
                 ReflectorsArg::Global => ReflectorModel::Global,
             },
             space: fit

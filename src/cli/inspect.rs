@@ -7,6 +7,7 @@ use anyhow::Context;
 use clap::Args;
 use specmap::envmap::convert;
 use specmap::envmap::overlay::write_overlay;
+use specmap::envmap::scene::ReflectorModel;
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -90,7 +91,7 @@ fn summary(r: &convert::Inspection, overlay: Option<&PathBuf>) -> String {
     light_lines(&mut out, &r.lights, &r.bright_reflectors);
     outln!(
         out,
-        "  reflectors   {:.1}% of the energy, lit by {} ({:?} model)",
+        "  reflectors   {:.1}% of the energy, lit by {} ({} model)",
         100.0 * r.reflector_energy_share,
         r.reflectors
             .carriers
@@ -98,7 +99,10 @@ fn summary(r: &convert::Inspection, overlay: Option<&PathBuf>) -> String {
             .map(|c| format!("{} {:.0}%", c.spd, 100.0 * c.share))
             .collect::<Vec<_>>()
             .join(", "),
-        r.reflectors.model
+        match r.reflectors.model {
+            ReflectorModel::Global => "global".to_string(),
+            ReflectorModel::Local { prior } => format!("local, prior {prior}"),
+        }
     );
     outln!(out, "  white        {}", r.white.reason);
     let p = &r.plan;

@@ -13,11 +13,13 @@
 //!   locus) at least [`WINDOW_MIN_K`] and [`WINDOW_MIN_SR`]; or a dim daylight-coloured region of
 //!   the upper hemisphere at least [`SKY_MIN_K`] and [`SKY_MIN_SR`] whose colour no lamp explains
 //!   (farther than [`EXPLAINED_UV`] from every lamp's white and the mixes of two, or of a lamp and
-//!   a window) and that is not a wall lit by a window ([`LIT_BY_WINDOW`] times dimmer and of its colour). It is the sky when it
+//!   a window; a region reaching [`SKY_TOP_DEG`] [`NIGHT_SKY_CONTRAST`] of the brightest lamp's
+//!   luminance or less is a night sky whatever its colour) and that is not a wall lit by a window ([`LIT_BY_WINDOW`] times dimmer and of its colour). It is the sky when it
 //!   reaches [`SKY_TOP_DEG`] or covers [`SKY_LARGE_SR`], otherwise a window; all sky regions are
 //!   one light.
 //!   With a sky in view, every bright daylight-coloured patch above the horizon (sky between
-//!   leaves, through a gap in the clouds) is part of it.
+//!   leaves, through a gap in the clouds) is part of it, unless it is
+//!   [`DAYLIGHT_LAMP_CONTRAST`] times brighter than the sky (a cool lamp under a night sky).
 //! - **lamp**: any other emitter, matched to a lamp family ([`super::families`]). With daylight
 //!   about, an emitter that is not [`DAYLIGHT_LAMP_CONTRAST`] times brighter than the sky is a
 //!   sunlit surface when it lies below the horizon or its colour matches no lamp (farther than
@@ -46,6 +48,9 @@ pub const SKY_MIN_K: f64 = 4000.0;
 pub const SKY_MIN_SR: f64 = 0.02;
 pub const EXPLAINED_UV: f64 = 0.006;
 pub const LIT_BY_WINDOW: f64 = 20.0;
+/// A region reaching the zenith this much dimmer than the brightest lamp is a night sky even of a
+/// lamp's colour (moonlight: 1e-5 of a street lamp; a wall a lamp lights: 1e-2).
+pub const NIGHT_SKY_CONTRAST: f64 = 1e-3;
 pub const SKY_TOP_DEG: f64 = 60.0;
 pub const SKY_LARGE_SR: f64 = 1.0;
 pub const LAMP_MATCH_UV: f64 = 0.01;
@@ -169,11 +174,7 @@ pub fn classify(
     }
     let context = Context {
         daylight: !daylight.is_empty() || !dim.is_empty() || sun_index.is_some(),
-        daylight_level: daylight
-            .iter()
-            .map(|&(k, _)| candidates[k].e.stats.mean_xyz[1])
-            .chain(dim.iter().map(|d| d.stats.mean_xyz[1]))
-            .fold(0f64, f64::max),
+        daylight_level: daylight_level(cells, &candidates, &daylight, &dim),
         sun: sun_index.map(|k| candidates[k].colour),
         sky: !sky_cells.is_empty(),
     };
@@ -205,6 +206,26 @@ pub fn classify(
         out.bright_reflectors.insert(0, format!("no sun: {why}"));
     }
     Ok(out)
+}
+
+/// The luminance of the sky's and windows' bright parts: the 95th percentile of their cells.
+fn daylight_level(
+    cells: &Cells,
+    candidates: &[Candidate],
+    daylight: &[(usize, LightKind)],
+    dim: &[Region],
+) -> f64 {
+    let mut y: Vec<f32> = daylight
+        .iter()
+        .flat_map(|&(k, _)| candidates[k].e.cells.iter())
+        .chain(dim.iter().flat_map(|d| d.cells.iter()))
+        .map(|&i| cells.y[i])
+        .collect();
+    if y.is_empty() {
+        return 0.0;
+    }
+    y.sort_by(|a, b| a.total_cmp(b));
+    y[(y.len() - 1) * 95 / 100] as f64
 }
 
 /// The emitters worth classifying (at least [`MIN_LIGHT_SHARE`] of the energy, at most
@@ -283,7 +304,12 @@ fn lamp_lights(
 ) -> Result<()> {
     // With a sky in view, a bright daylight-coloured patch above the horizon is more of it
     // (sky between leaves, through a gap in the clouds).
-    let sky_patch = |c: &Candidate| context.sky && is_sky_patch(c);
+    // (not a lamp far brighter than the sky: a cool street lamp under a night sky).
+    let sky_patch = |c: &Candidate| {
+        context.sky
+            && is_sky_patch(c)
+            && c.e.stats.mean_xyz[1] < DAYLIGHT_LAMP_CONTRAST * context.daylight_level
+    };
     let lamps: Vec<&Candidate> = free.iter().copied().filter(|c| !sky_patch(c)).collect();
     let lamp_peak = lamps.iter().map(|c| c.e.stats.peak).fold(0f64, f64::max);
     let lit_by_lamp = |c: &Candidate| {
@@ -354,6 +380,11 @@ fn dim_skies(
     lamp_whites: &[Colour],
     windows: &[(Colour, f64)],
 ) -> Result<Vec<Region>> {
+    let lamp_peak = emitters
+        .iter()
+        .filter(|c| !is_window(c))
+        .map(|c| c.e.stats.peak)
+        .fold(0f64, f64::max);
     let mut in_emitter = vec![false; cells.len()];
     for c in emitters {
         for &i in &c.e.cells {
@@ -375,8 +406,12 @@ fn dim_skies(
             continue;
         }
         let colour = Colour::of(stats.mean_xyz)?;
-        if !colour.cct_k.is_some_and(|k| k >= SKY_MIN_K) || explained(&colour, lamp_whites, windows)
-        {
+        // A night sky may share a lamp's colour, but no lamp lights a region reaching the zenith
+        // this dimly: far below what lit walls get.
+        let night_sky = stats.top_elevation_deg >= SKY_TOP_DEG
+            && stats.mean_xyz[1] < NIGHT_SKY_CONTRAST * lamp_peak;
+        let lit = explained(&colour, lamp_whites, windows) && !night_sky;
+        if !colour.cct_k.is_some_and(|k| k >= SKY_MIN_K) || lit {
             continue;
         }
         let lit_by_window = windows.iter().any(|(w, y)| {
@@ -603,7 +638,7 @@ struct Context {
     daylight: bool,
     /// A sky is in view.
     sky: bool,
-    /// The brightest sky or window's mean luminance.
+    /// The luminance of the sky's and windows' bright parts.
     daylight_level: f64,
     sun: Option<Colour>,
 }

@@ -101,6 +101,10 @@ pub const FILAMENT_K: (f64, f64) = (1500.0, 3600.0);
 /// shares the locus, and is the likelier street lamp).
 pub const FILAMENT_PREFERRED_K: (f64, f64) = (2400.0, 3600.0);
 
+/// A lamp this near a table's white (CIE 1960 uv; about a just noticeable difference), and no
+/// other family's, is taken for that table whatever the rules below prefer.
+pub const SAME_WHITE_UV: f64 = 0.0015;
+
 /// Matches within this uv distance of the nearest are alternatives the shape can choose among.
 pub const AMBIGUITY_UV: f64 = 0.003;
 
@@ -171,8 +175,8 @@ pub struct LampMatch {
 type Near = (String, Family, u8, f64);
 
 /// Matches a lamp of colour `uv` (CIE 1960), correlated colour temperature `cct_k` (None far from
-/// the locus) and shape `elongation`. Among the whites within [`AMBIGUITY_UV`] of the nearest, in
-/// order: a warm white below [`SODIUM_BELOW_K`] near a sodium table is sodium; a strip is the
+/// the locus) and shape `elongation`. A colour within [`SAME_WHITE_UV`] of a white is that
+/// table. Otherwise, among the whites within [`AMBIGUITY_UV`] of the nearest, in order: a warm white below [`SODIUM_BELOW_K`] near a sodium table is sodium; a strip is the
 /// most common near fluorescent; a compact source between 2400 and 3600 K on the locus is a
 /// filament; a compact one near a white LED is the most common such LED; otherwise the nearest.
 pub fn match_lamp(uv: [f64; 2], cct_k: Option<f64>, elongation: f64) -> Result<LampMatch> {
@@ -233,12 +237,28 @@ pub fn match_lamp(uv: [f64; 2], cct_k: Option<f64>, elongation: f64) -> Result<L
             "compact: the most common near white LED",
         ),
     ];
-    let (chosen, why) = rules
+    // A colour within a just noticeable difference of a table's white is that table, unless
+    // tables of other families are as near, or the filaments' Planckian locus (a continuum
+    // every warm white is near).
+    let on_locus = near
         .iter()
-        .find_map(|&(applies, family, why)| {
-            applies.then(|| pick(family)).flatten().map(|f| (f, why))
-        })
-        .unwrap_or((near[0], "the nearest white"));
+        .any(|f| f.1 == Family::Incandescent && f.3 <= SAME_WHITE_UV);
+    let within: Vec<&&Near> = near.iter().filter(|f| f.3 <= SAME_WHITE_UV).collect();
+    let one_family = within.iter().all(|f| f.1 == within[0].1);
+    let same = within
+        .first()
+        .filter(|f| f.1 != Family::Incandescent && one_family && !on_locus)
+        .copied();
+    let (chosen, why) = if let Some(&f) = same {
+        (f, "its white, within a just noticeable difference")
+    } else {
+        rules
+            .iter()
+            .find_map(|&(applies, family, why)| {
+                applies.then(|| pick(family)).flatten().map(|f| (f, why))
+            })
+            .unwrap_or((near[0], "the nearest white"))
+    };
     Ok(LampMatch {
         spd: chosen.0.clone(),
         family: chosen.1,
@@ -284,13 +304,16 @@ mod tests {
         assert_eq!(spot.spd, "Planckian 3000 K");
         let tube = match_lamp(uv, Some(3000.0), 8.0).unwrap();
         assert_eq!(tube.spd, "FL12", "{tube:?}");
-        // A 4000 K tube is triphosphor, a 4000 K spot an LED, a 2000 K white sodium.
+        // A 4000 K tube is triphosphor, a 4000 K spot an LED (LED-B3's white is within a just
+        // noticeable difference of FL11's), a 2000 K white sodium.
         let uv = uv_of("FL11");
         assert_eq!(match_lamp(uv, Some(4000.0), 8.0).unwrap().spd, "FL11");
         assert_eq!(
             match_lamp(uv, Some(4000.0), 1.0).unwrap().family,
             Family::Led
         );
+        let spot = match_lamp(planckian_uv(4050.0), Some(4050.0), 1.0).unwrap();
+        assert_eq!(spot.family, Family::Led, "{spot:?}");
         let m = match_lamp(planckian_uv(1970.0), Some(1970.0), 1.0).unwrap();
         assert_eq!(m.family, Family::HighPressureSodium, "{m:?}");
         // Planckian uv agrees with the table of illuminant A (a 2856 K black body).

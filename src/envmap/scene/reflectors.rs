@@ -16,16 +16,29 @@ use super::cells::Cells;
 use super::{Light, REFLECTOR};
 use nalgebra::Vector3;
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[serde(tag = "model", rename_all = "lowercase")]
 pub enum ReflectorModel {
     Global,
-    #[default]
-    Local,
+    /// `prior`: how strongly the mix is pulled towards the global one (0: the colours alone).
+    Local {
+        prior: f64,
+    },
+}
+
+impl Default for ReflectorModel {
+    fn default() -> Self {
+        ReflectorModel::Local { prior: LOCAL_PRIOR }
+    }
 }
 
 pub const LOCAL_SIGMA_DEG: f64 = 20.0;
-pub const LOCAL_PRIOR: f64 = 0.02;
+/// The default pull towards the global mix, chosen by measurement on the truth scenes
+/// (docs/conversion.md): 0.02 lets the saturated patches of a street's shop fronts pull their
+/// walls' carrier towards the one LED lamp (mean rendition 0.58 there), 0.5 keeps the street at
+/// 0.39 and still lets the walls of a mixed office follow their window or their tubes (0.65,
+/// against 0.67 with one global mix).
+pub const LOCAL_PRIOR: f64 = 0.5;
 pub const GRID_WIDTH: usize = 64;
 
 /// A distinct light spectrum that reflectors can be lit by.
@@ -66,10 +79,11 @@ impl Reflectors {
         let (carriers, light_carrier) = carriers_of(lights);
         let prior: Vec<f64> = carriers.iter().map(|c| c.share).collect();
         let grid_height = GRID_WIDTH / 2;
-        let grid = if carriers.len() < 2 || model == ReflectorModel::Global {
-            vec![prior.iter().map(|&v| v as f32).collect(); GRID_WIDTH * grid_height]
-        } else {
-            local_mixes(cells, label, &carriers, &prior, grid_height)
+        let grid = match model {
+            ReflectorModel::Local { prior: weight } if carriers.len() >= 2 => {
+                local_mixes(cells, label, &carriers, &prior, weight, grid_height)
+            }
+            _ => vec![prior.iter().map(|&v| v as f32).collect(); GRID_WIDTH * grid_height],
         };
         Reflectors {
             model,
@@ -141,6 +155,7 @@ fn local_mixes(
     label: &[u16],
     carriers: &[Carrier],
     prior: &[f64],
+    weight: f64,
     grid_height: usize,
 ) -> Vec<Vec<f32>> {
     let coarse = GRID_WIDTH * grid_height;
@@ -176,7 +191,7 @@ fn local_mixes(
                 }
             }
             let m = if s[1] > 0.0 {
-                nearest_mix(carriers, prior, &(s / s[1]))
+                nearest_mix(carriers, prior, weight, &(s / s[1]))
             } else {
                 prior.to_vec()
             };
@@ -196,13 +211,18 @@ fn coarse_cell(d: [f64; 3], grid_height: usize) -> usize {
 }
 
 /// The mix of the carriers' whites (on the simplex) nearest `target` (XYZ, Y = 1), pulled
-/// towards `prior`: min |sum m_k xyz_k - target|^2 + LOCAL_PRIOR |m - prior|^2, by projected
+/// towards `prior`: min |sum m_k xyz_k - target|^2 + weight |m - prior|^2, by projected
 /// gradient descent.
-pub fn nearest_mix(carriers: &[Carrier], prior: &[f64], target: &Vector3<f64>) -> Vec<f64> {
+pub fn nearest_mix(
+    carriers: &[Carrier],
+    prior: &[f64],
+    weight: f64,
+    target: &Vector3<f64>,
+) -> Vec<f64> {
     let n = carriers.len();
     let mut m = prior.to_vec();
     let lipschitz: f64 =
-        2.0 * carriers.iter().map(|c| c.xyz.norm_squared()).sum::<f64>() + 2.0 * LOCAL_PRIOR;
+        2.0 * carriers.iter().map(|c| c.xyz.norm_squared()).sum::<f64>() + 2.0 * weight;
     let step = 1.0 / lipschitz;
     for _ in 0..300 {
         let mut mix = Vector3::zeros();
@@ -211,7 +231,7 @@ pub fn nearest_mix(carriers: &[Carrier], prior: &[f64], target: &Vector3<f64>) -
         }
         let r = mix - target;
         let grad: Vec<f64> = (0..n)
-            .map(|k| 2.0 * carriers[k].xyz.dot(&r) + 2.0 * LOCAL_PRIOR * (m[k] - prior[k]))
+            .map(|k| 2.0 * carriers[k].xyz.dot(&r) + 2.0 * weight * (m[k] - prior[k]))
             .collect();
         let next: Vec<f64> = (0..n).map(|k| m[k] - step * grad[k]).collect();
         m = project_simplex(&next);
@@ -265,10 +285,10 @@ mod tests {
         let prior = [0.5, 0.5];
         // 80% daylight, 20% A.
         let target = cs[0].xyz * 0.8 + cs[1].xyz * 0.2;
-        let m = nearest_mix(&cs, &prior, &target);
+        let m = nearest_mix(&cs, &prior, 0.02, &target);
         assert!((m[0] - 0.8).abs() < 0.03, "{m:?}");
         // Pure A's colour: almost all A.
-        let m = nearest_mix(&cs, &prior, &cs[1].xyz);
+        let m = nearest_mix(&cs, &prior, 0.02, &cs[1].xyz);
         assert!(m[1] > 0.9, "{m:?}");
     }
 }
