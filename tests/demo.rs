@@ -68,6 +68,7 @@ fn the_quick_demo_writes_a_page_whose_images_all_exist() {
         "basis.png",
         "roundtrip.png",
         "roundtrip-paper.png",
+        "lights.png",
         "ball.png",
         "transparent-ball.png",
         "cylinders.png",
@@ -144,6 +145,56 @@ fn the_quick_demo_writes_a_page_whose_images_all_exist() {
     }
     // The fit's exact mode returns every colour.
     assert!(json["fit"][1]["roundtrip"]["max_dE2000"].as_f64().unwrap() < 1e-6);
+}
+
+/// Every number of the page's conversion section comes from the command printed under it: the
+/// printed `convert` and `roundtrip`, run again, give the page's numbers.
+#[test]
+fn the_conversion_numbers_come_from_the_commands_printed_under_them() {
+    let t = tempfile::tempdir().unwrap();
+    let dir = t.path().join("demo");
+    let (page, json) = demo(&dir, &[]);
+    let words = |c: &str| -> Vec<String> {
+        c.split_whitespace()
+            .skip(1)
+            .map(|w| w.trim_matches('\'').to_string())
+            .collect()
+    };
+    let convert = json["convert_command"].as_str().unwrap();
+    let roundtrip = json["roundtrip_command"].as_str().unwrap();
+    for c in [convert, roundtrip] {
+        assert!(page.contains(c), "the page does not print `{c}`");
+    }
+    // The default: no --mode on the command, the faithful method in its report.
+    assert!(!convert.contains("--mode"), "{convert}");
+    assert_eq!(json["convert"]["mode"], "faithful");
+    let mut args = words(convert);
+    args.push("--json".into());
+    let out = specmap(&args.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let again: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(again["lights"], json["convert"]["lights"]);
+    assert_eq!(again["spectra"], json["convert"]["spectra"]);
+    let mut args = words(roundtrip);
+    args.push("--json".into());
+    let out = specmap(&args.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let rt: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let shown = format!(
+        "CIEDE2000 energy-weighted mean {:.4}, max {:.4}",
+        rt["all"]["weighted_mean_de2000"].as_f64().unwrap(),
+        rt["all"]["max_de2000"].as_f64().unwrap()
+    );
+    assert!(page.contains(&shown), "the page lacks `{shown}`");
+    assert!(!page.contains("exact mode (the default)"));
 }
 
 #[test]

@@ -10,8 +10,9 @@ use super::fit::{mode_name, write_basis_plot};
 use anyhow::Context;
 use clap::{Args, ValueEnum};
 use specmap::colorimetry::{Cmfs, Observer, RgbSpace};
-use specmap::envmap::convert::{self, ConvertOptions, ConvertReport, LightSpec};
+use specmap::envmap::convert::{self, ConvertOptions, ConvertReport};
 use specmap::envmap::heatmap::{choose_range, write_heatmap, Scale};
+use specmap::envmap::overlay::write_overlay;
 use specmap::envmap::roundtrip::{round_trip_file, FileRoundTrip};
 use specmap::envmap::{exrio, layout};
 use specmap::fit::{self, FitInput, Mode};
@@ -125,6 +126,13 @@ pub(super) struct FitRow {
     pub round_trip: fit::RoundTrip,
 }
 
+/// The lights of the demo's map, drawn over it.
+pub(super) struct Inspected {
+    pub lights: Vec<specmap::envmap::scene::Light>,
+    pub overlay: String,
+    pub command: String,
+}
+
 /// A converted map and its file round trip.
 pub(super) struct Converted {
     pub report: ConvertReport,
@@ -164,6 +172,7 @@ pub(super) struct Run {
     pub fit_commands: [String; 2],
     pub converted: Converted,
     pub paper: Converted,
+    pub inspected: Inspected,
     pub renderer: String,
     pub adapter: Option<AdapterReport>,
     pub renders: Vec<Render>,
@@ -287,22 +296,26 @@ pub fn run(a: DemoArgs) -> anyhow::Result<()> {
         out(&spectral_name).display()
     );
     let t = Instant::now();
+    let size = |n: Option<usize>| -> Vec<String> {
+        n.map_or(Vec::new(), |n| vec!["--size".into(), n.to_string()])
+    };
     let converted = convert_map(
         &env_str,
         &dir,
         &spectral_name,
         "roundtrip.png",
-        Mode::Exact,
-        sizes.map,
+        &size(sizes.map),
     )?;
+    let mut paper_flags = vec!["--mode".to_string(), "paper".to_string()];
+    paper_flags.extend(size(Some(sizes.paper_map)));
     let paper = convert_map(
         &env_str,
         &dir,
         &paper_name,
         "roundtrip-paper.png",
-        Mode::Paper,
-        Some(sizes.paper_map),
+        &paper_flags,
     )?;
+    let inspected = inspect_map(&env_str, &dir, "lights.png")?;
     seconds.push(("convert", t.elapsed().as_secs_f64()));
 
     // 3. The four presets under the converted map (the chart has its own three lights).
@@ -402,6 +415,7 @@ pub fn run(a: DemoArgs) -> anyhow::Result<()> {
         fit_commands,
         converted,
         paper,
+        inspected,
         renderer,
         adapter,
         renders,
@@ -419,6 +433,7 @@ pub fn run(a: DemoArgs) -> anyhow::Result<()> {
         files.push(c.file.clone());
         files.push(c.heatmap.clone());
     }
+    files.push(run.inspected.overlay.clone());
     files.extend(run.renders.iter().map(|r| r.file.clone()));
     files.push("index.html".into());
     if a.json {
@@ -438,6 +453,9 @@ pub fn run(a: DemoArgs) -> anyhow::Result<()> {
                 "roundtrip": r.round_trip,
             })).collect::<Vec<_>>(),
             "convert": run.converted.report,
+            "convert_command": run.converted.command,
+            "roundtrip_command": run.converted.roundtrip_command,
+            "lights": run.inspected.lights,
             "roundtrip": run.converted.round_trip,
             "roundtrip_paper": run.paper.round_trip,
             "renders": run.renders.iter().map(|r| serde_json::json!({
@@ -534,23 +552,28 @@ fn file_stem(p: &Path) -> String {
     }
 }
 
-/// `specmap convert INPUT -o DIR/NAME --light auto [--mode M] [--size N]`, then `specmap
-/// roundtrip DIR/NAME --heatmap DIR/HEATMAP`.
+/// The convert flags as `specmap convert` parses them, so that what runs is what the page prints.
+#[derive(Debug, clap::Parser)]
+struct Flags {
+    #[command(flatten)]
+    options: super::convert::ConvertOptionArgs,
+}
+
+/// `specmap convert INPUT -o DIR/NAME FLAGS...`, then `specmap roundtrip DIR/NAME --heatmap
+/// DIR/HEATMAP`: the options parsed from `flags` as the command line would parse them.
 fn convert_map(
     input: &str,
     dir: &Path,
     name: &str,
     heatmap: &str,
-    mode: Mode,
-    size: Option<usize>,
+    flags: &[String],
 ) -> anyhow::Result<Converted> {
+    use clap::Parser;
     let output = dir.join(name);
-    let opts = ConvertOptions {
-        light: LightSpec::Auto,
-        mode,
-        size,
-        ..ConvertOptions::default()
-    };
+    let opts =
+        Flags::try_parse_from(std::iter::once("convert".to_string()).chain(flags.iter().cloned()))?
+            .options
+            .to_options()?;
     let report = convert::convert(input, &output, &opts, &|_, _| {})
         .with_context(|| format!("converting {input}"))?;
     let mut de = Vec::new();
@@ -566,12 +589,9 @@ fn convert_map(
         &range,
     )?;
     let out = sh(&output.display().to_string());
-    let mut command = format!("specmap convert {} -o {out} --light auto", sh(input));
-    if mode != Mode::Exact {
-        command += &format!(" --mode {}", mode_name(mode));
-    }
-    if let Some(s) = size {
-        command += &format!(" --size {s}");
+    let mut command = format!("specmap convert {} -o {out}", sh(input));
+    for f in flags {
+        command += &format!(" {}", sh(f));
     }
     Ok(Converted {
         report,
@@ -582,6 +602,24 @@ fn convert_map(
         roundtrip_command: format!(
             "specmap roundtrip {out} --heatmap {}",
             sh(&heatmap_path.display().to_string())
+        ),
+    })
+}
+
+/// `specmap inspect INPUT --overlay DIR/NAME`: the lights of the map drawn over it.
+fn inspect_map(input: &str, dir: &Path, name: &str) -> anyhow::Result<Inspected> {
+    let path = dir.join(name);
+    let opts = ConvertOptions::faithful();
+    let inspection =
+        convert::inspect(input, &opts).with_context(|| format!("inspecting {input}"))?;
+    write_overlay(&path, &inspection.map, &inspection.scene)?;
+    Ok(Inspected {
+        lights: inspection.lights,
+        overlay: name.to_string(),
+        command: format!(
+            "specmap inspect {} --overlay {}",
+            sh(input),
+            sh(&path.display().to_string())
         ),
     })
 }

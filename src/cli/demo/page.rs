@@ -231,25 +231,56 @@ fn convert_facts(o: &mut String, c: &Converted) {
     );
     row(
         o,
-        "main light",
-        match &r.light_choice {
-            Some(l) => format!("{} (auto: {})", r.light, l.reason),
-            None => r.light.clone(),
-        },
+        "lights",
+        r.lights
+            .iter()
+            .map(|l| {
+                format!(
+                    "{} {} ({:.1}%)",
+                    format!("{:?}", l.kind).to_lowercase(),
+                    l.spd,
+                    100.0 * l.energy_share
+                )
+            })
+            .collect::<Vec<_>>()
+            .join(", "),
     );
-    row(
-        o,
-        "fit",
-        format!(
-            "{} mode, weights {:.4} {:.4} {:.4}, condition {:.3}{}",
-            r.mode,
-            r.weights[0],
-            r.weights[1],
-            r.weights[2],
-            r.condition_number,
-            if r.regularized { " (reduced)" } else { "" }
-        ),
-    );
+    if r.mode == "faithful" {
+        row(
+            o,
+            "spectra",
+            format!(
+                "{} carriers and {} mixes of them; {} pixels no non-negative spectrum under their \
+                 light makes; {} negative",
+                r.carriers.len(),
+                r.carrier_mixes,
+                r.spectra.nearest,
+                r.spectra.negative
+            ),
+        );
+    } else {
+        row(
+            o,
+            "main light",
+            match &r.light_choice {
+                Some(l) => format!("{} (auto: {})", r.light, l.reason),
+                None => r.light.clone(),
+            },
+        );
+        row(
+            o,
+            "fit",
+            format!(
+                "{} mode, weights {:.4} {:.4} {:.4}, condition {:.3}{}",
+                r.mode,
+                r.weights[0],
+                r.weights[1],
+                r.weights[2],
+                r.condition_number,
+                if r.regularized { " (reduced)" } else { "" }
+            ),
+        );
+    }
     row(o, "sun", crate::cli::convert::sun_text(r));
     row(
         o,
@@ -286,16 +317,42 @@ fn convert_section(o: &mut String, run: &Run) {
     outln!(
         o,
         "<p><code>{}</code> becomes a spectral OpenEXR (one channel per wavelength, an RGB \
-         preview and a sun mask) with the main light chosen from the scene and the sun given its \
-         own SPD. The heatmaps integrate each pixel's spectrum back to RGB and compare it with \
-         the original (ΔE00); each has its own colour scale, drawn beneath it with the range it \
-         spans. In exact mode only the sun, replaced by its SPD, differs; the paper's three \
-         weights desaturate every coloured pixel.</p>",
+         preview and a sun mask). First the map's lights are found and classified (the sun, the \
+         sky or windows, each lamp of its family); then every pixel gets a non-negative spectrum \
+         carried by the light that lights it. The heatmaps integrate each pixel's spectrum back \
+         to RGB and compare it with the original (ΔE00); each has its own colour scale, drawn \
+         beneath it with the range it spans. By default only the sun's pixels, which share one \
+         spectrum, and the few colours no non-negative spectrum under their light makes, \
+         differ; the paper's three weights desaturate every coloured pixel.</p>",
         esc(&run.env),
     );
+    let i = &run.inspected;
+    outln!(o, "<h3>the lights of the map</h3>");
+    outln!(o, "<table class=\"facts\">");
+    for l in &i.lights {
+        outln!(
+            o,
+            "<tr><th>{}</th><td>{}: {:.1}% of the energy, {:.1}° up; {}</td></tr>",
+            esc(&format!("{:?}", l.kind).to_lowercase()),
+            esc(&l.spd),
+            100.0 * l.energy_share,
+            l.elevation_deg,
+            esc(&l.reason)
+        );
+    }
+    outln!(o, "</table>");
+    figure(
+        o,
+        &i.overlay,
+        "The map's lights drawn over it",
+        "Each light's region tinted and outlined in its kind's colour, numbered, with its \
+         spectrum and share of the energy.",
+        "wide",
+    );
+    commands(o, &[&i.command]);
     for (c, what) in [
-        (&run.converted, "exact mode (the default)"),
-        (&run.paper, "paper mode, a smaller copy"),
+        (&run.converted, "the default (all lights, faithful)"),
+        (&run.paper, "the paper's mode, a smaller copy"),
     ] {
         outln!(o, "<h3>{}</h3>", esc(what));
         convert_facts(o, c);
