@@ -32,10 +32,11 @@
 //! every evaluation is generic over [`Real`]). The factor `exp(-Im delta)` is at most 1, so thick
 //! absorbing or evanescent layers underflow to 0 instead of overflowing.
 //!
-//! Fringes of a thick layer are about `lambda^2 / (2 Re(q) d)` apart. When that is finer than the
-//! wavelength step of the requested grid the coherent spectrum would be aliased, so
-//! [`Stack::response`] treats the layer incoherently (intensities summed, phases averaged out, as
-//! tmm's `inc_tmm`) and lists it in [`Response::incoherent_layers`].
+//! Fringes of a thick layer are about `lambda^2 / (2 Re(q) d)` apart. A grid resolves them only
+//! with at least two samples per fringe (Nyquist): when the period is below twice the wavelength
+//! step of the requested grid the coherent spectrum would be aliased, so [`Stack::response`]
+//! treats the layer incoherently (intensities summed, phases averaged out, as tmm's `inc_tmm`)
+//! and lists it in [`Response::incoherent_layers`].
 
 use crate::data::Table;
 use crate::error::{Error, Result};
@@ -947,11 +948,15 @@ impl Layer {
     }
 }
 
+/// Samples per fringe below which [`Coherence::Auto`] treats a layer incoherently: the Nyquist
+/// rate of the fringes' cosine.
+pub const NYQUIST_SAMPLES: f64 = 2.0;
+
 /// How [`Stack::response`] treats thick layers.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Coherence {
-    /// Incoherent where the layer's fringe period is finer than the grid step somewhere on the
-    /// grid, coherent elsewhere.
+    /// Incoherent where the layer's fringe period is below twice the grid step (fewer than two
+    /// samples per fringe, [`NYQUIST_SAMPLES`]) somewhere on the grid, coherent elsewhere.
     Auto,
     /// Every layer coherent, whatever the grid (aliased fringes for thick layers).
     Coherent,
@@ -1017,8 +1022,8 @@ impl Stack {
     }
 
     /// R and T on `grid` in f64. With [`Coherence::Auto`], a layer whose fringe period
-    /// `lambda^2 / (2 Re(n cos theta) d)` is below the grid step at some wavelength is computed
-    /// incoherently over the whole grid, and listed in the result.
+    /// `lambda^2 / (2 Re(n cos theta) d)` is below [`NYQUIST_SAMPLES`] grid steps at some
+    /// wavelength is computed incoherently over the whole grid, and listed in the result.
     pub fn response(
         &self,
         grid: &WavelengthGrid,
@@ -1041,9 +1046,9 @@ impl Stack {
             Coherence::Auto => (0..self.layers.len())
                 .filter(|&i| {
                     grid.len() > 1
-                        && films
-                            .iter()
-                            .any(|f| f.fringe_period_nm(i, incidence) < grid.step_nm())
+                        && films.iter().any(|f| {
+                            f.fringe_period_nm(i, incidence) < NYQUIST_SAMPLES * grid.step_nm()
+                        })
                 })
                 .collect(),
         };
@@ -1119,6 +1124,81 @@ mod tests {
         // radians (6.3e6) has an ulp of 0.5 rad.
         let e = propagate(Complex::new(1.0f32, 0.0), 1_000_000.25);
         assert!((e.re).abs() < 1e-6 && (e.im - 1.0).abs() < 1e-6, "{e}");
+    }
+
+    /// CIEDE2000 under D65 of a reflectance on `grid` against the coherent one at 1 nm.
+    fn colour_error(stack: &Stack, grid: &WavelengthGrid, coherence: Coherence) -> f64 {
+        use crate::colorimetry::{delta_e_2000, Cmfs, Lab, Observer};
+        use crate::spectrum::{Interpolation, Rule, Spectrum};
+        let d65 = crate::data::spectrum("D65").unwrap().data;
+        let xyz = |g: &WavelengthGrid, c: Coherence, rule: Rule| {
+            let r = stack
+                .response(g, &Incidence::NORMAL, Polarization::Unpolarized, c)
+                .unwrap();
+            let cmfs = Cmfs::new(Observer::Cie1931, g).unwrap();
+            let light = d65.resample(g, Interpolation::LIGHT);
+            let r = Spectrum::new(*g, r.reflectance).unwrap();
+            (
+                cmfs.reflectance_xyz(&r, &light, rule).unwrap(),
+                cmfs.light_xyz(&light, rule).unwrap(),
+            )
+        };
+        let (truth, white) = xyz(
+            &WavelengthGrid::visible_1nm(),
+            Coherence::Coherent,
+            Rule::Simpson,
+        );
+        let (got, _) = xyz(grid, coherence, Rule::Riemann);
+        delta_e_2000(Lab::from_xyz(got, white), Lab::from_xyz(truth, white))
+    }
+
+    fn slab(d: f64) -> Stack {
+        Stack::new(
+            Index::real(1.0).unwrap().into(),
+            vec![Layer::new(Index::real(1.5).unwrap().into(), d).unwrap()],
+            Index::real(1.0).unwrap().into(),
+        )
+    }
+
+    #[test]
+    fn auto_goes_incoherent_below_two_samples_per_fringe() {
+        // 5 um of n = 1.5 in air: fringes 9.6 nm apart at 380 nm, fewer than two samples per
+        // fringe on a 5 nm grid. The period-below-the-step rule kept it coherent; Nyquist does
+        // not.
+        let grid = WavelengthGrid::new(380.0, 780.0, 5.0).unwrap();
+        let f = slab(5000.0).at::<f64>(380.0).unwrap();
+        let period = f.fringe_period_nm(0, &Incidence::NORMAL);
+        assert!((period - 9.63).abs() < 0.01, "{period}");
+        let auto = |d: f64| {
+            slab(d)
+                .response(&grid, &Incidence::NORMAL, Polarization::S, Coherence::Auto)
+                .unwrap()
+                .incoherent_layers
+        };
+        assert_eq!(auto(5000.0), vec![0]);
+        // 1 um: fringes of 48 nm at 380 nm, ten samples each: resolved, and kept coherent.
+        assert!(auto(1000.0).is_empty());
+    }
+
+    #[test]
+    fn between_one_and_two_samples_per_fringe_incoherent_is_the_truer_colour() {
+        // Measured against the coherent film at 1 nm (Simpson) under D65: 6 and 8 um on a 5 nm
+        // grid (1.6 and 1.2 samples per fringe at 380 nm), which the period-below-the-step rule
+        // kept coherent, alias into colours 2 to 10 times further from the truth than the
+        // fringes' average. At two samples per fringe (5 um) both are within 0.1 of it.
+        let grid = WavelengthGrid::new(380.0, 780.0, 5.0).unwrap();
+        for d in [6000.0, 8000.0] {
+            let coherent = colour_error(&slab(d), &grid, Coherence::Coherent);
+            let auto = colour_error(&slab(d), &grid, Coherence::Auto);
+            assert!(
+                auto < 0.5 * coherent,
+                "{d} nm: auto {auto} vs coherent {coherent}"
+            );
+        }
+        for c in [Coherence::Coherent, Coherence::Auto] {
+            let e = colour_error(&slab(5000.0), &grid, c.clone());
+            assert!(e < 0.1, "5 um {c:?}: {e}");
+        }
     }
 
     #[test]
