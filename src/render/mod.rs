@@ -37,6 +37,7 @@ pub mod gpu;
 pub mod image;
 pub mod prepare;
 pub mod presets;
+pub mod stimuli;
 pub mod sweep;
 
 pub use self::image::{compare, Comparison, Image};
@@ -277,64 +278,6 @@ impl std::fmt::Display for Backend {
 }
 
 impl Scene {
-    /// What the scene shows, as stimuli for [`crate::tradeoff::choose_grid`] (`--tolerance`):
-    /// every light of every lighting (the main light and `E`) seen directly, and under each the
-    /// pigments and films of the objects it lights; films at 0 and 60 degrees, at both ends and
-    /// the middle of a thickness ramp, coherent as the renderer computes them.
-    pub fn stimuli(&self) -> Result<Vec<crate::tradeoff::Stimulus>> {
-        use crate::thinfilm::{Coherence, Incidence, Stack};
-        use crate::tradeoff::{Stimulus, Surface as Seen};
-        let mut out = Vec::new();
-        for (i, lighting) in self.lightings.iter().enumerate() {
-            let mut lights = vec![(lighting.label.clone(), lighting.light.clone())];
-            if lighting.e_label != lighting.label {
-                lights.push((lighting.e_label.clone(), lighting.e_spd.clone()));
-            }
-            for (label, spd) in lights {
-                out.push(Stimulus::emitter(label.clone(), spd.clone()));
-                for o in self.objects.iter().filter(|o| o.lighting == i) {
-                    let s = &o.surface;
-                    if let Some(r) = &s.diffuse {
-                        out.push(Stimulus {
-                            name: format!("{} under {label}", s.label),
-                            light: spd.clone(),
-                            surface: Seen::Reflectance(r.clone()),
-                        });
-                    }
-                    let Some(film) = &s.film else { continue };
-                    let scales: Vec<f64> = match o.ramp {
-                        Some(r) => vec![r.s0, 0.5 * (r.s0 + r.s1), r.s1],
-                        None => vec![1.0],
-                    };
-                    for k in scales {
-                        let layers = film
-                            .layers
-                            .iter()
-                            .map(|l| Layer::new(l.material().clone(), l.thickness_nm() * k))
-                            .collect::<Result<Vec<_>>>()?;
-                        let stack =
-                            Stack::new(film.ambient.clone(), layers, film.substrate.clone());
-                        for degrees in [0.0, 60.0] {
-                            out.push(Stimulus {
-                                name: format!(
-                                    "{} film (x{k:.2}) at {degrees} deg under {label}",
-                                    s.label
-                                ),
-                                light: spd.clone(),
-                                surface: Seen::Film {
-                                    stack: stack.clone(),
-                                    incidence: Incidence::degrees(degrees)?,
-                                    coherence: Coherence::Coherent,
-                                },
-                            });
-                        }
-                    }
-                }
-            }
-        }
-        Ok(out)
-    }
-
     /// Checks the scene's consistency (indices, sizes, films) before any work is done.
     pub fn validate(&self) -> Result<()> {
         if self.width == 0 || self.height == 0 {
@@ -410,6 +353,16 @@ impl Scene {
     /// Renders on the CPU.
     pub fn render_cpu(&self, spectral: &Spectral) -> Result<Image> {
         let p = prepare::Prepared::new(self, spectral)?;
+        Ok(cpu::render(&p))
+    }
+
+    /// Renders on the CPU with the quadrature `q`, in the output space `space`.
+    pub fn render_cpu_with(
+        &self,
+        q: &crate::quadrature::Quadrature,
+        space: RgbSpace,
+    ) -> Result<Image> {
+        let p = prepare::Prepared::with_quadrature(self, q, space)?;
         Ok(cpu::render(&p))
     }
 }
