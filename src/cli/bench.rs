@@ -128,15 +128,15 @@ pub fn run(a: BenchArgs) -> anyhow::Result<()> {
     for &d in thicknesses {
         eprintln!("bench: film {d} nm");
         for (coherence, label) in [(Coherence::Coherent, "coherent"), (Coherence::Auto, "auto")] {
-            let stimuli = vec![Stimulus {
-                name: format!("{d} nm film ({label})"),
-                light: d65.data.clone(),
-                surface: Surface::Film {
+            let stimuli = vec![Stimulus::new(
+                format!("{d} nm film ({label})"),
+                d65.data.clone(),
+                Surface::Film {
                     stack: soap_film(d)?,
                     incidence: Incidence::degrees(0.0)?,
                     coherence: coherence.clone(),
                 },
-            }];
+            )];
             // The reference is coherent at 1 nm whatever the setting.
             let truth = vec![Stimulus {
                 surface: Surface::Film {
