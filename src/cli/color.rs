@@ -6,12 +6,12 @@ use super::SpaceArg;
 use clap::Args;
 use specmap::colorimetry::{cct, srgb8, Cmfs, Lab, Observer, RgbSpace, Xyz, D65_XY};
 use specmap::data;
-use specmap::quadrature::choose::{self, Family};
+use specmap::quadrature::choose::{self, Family, Selection};
 use specmap::quadrature::estimate::White;
 use specmap::quadrature::fit::Options;
 use specmap::quadrature::Quadrature;
 use specmap::spectrum::{Interpolation, Rule};
-use specmap::tradeoff::{choose_grid, Stimulus, Surface};
+use specmap::tradeoff::{choose_grid, GridChoice, Stimulus, Surface};
 
 #[derive(Debug, Args)]
 pub struct ColorArgs {
@@ -44,7 +44,6 @@ pub struct ColorArgs {
 pub fn run(a: ColorArgs) -> anyhow::Result<()> {
     let observer = Observer::from(a.spectral.observer);
     let rule = Rule::from(a.spectral.rule);
-    let range = a.spectral.range;
     let space = RgbSpace::from(a.space);
     let spd = data::spectrum(&a.spd)?;
     let under = a.under.as_deref().map(data::spectrum).transpose()?;
@@ -59,74 +58,10 @@ pub fn run(a: ColorArgs) -> anyhow::Result<()> {
     let light_label = under
         .as_ref()
         .map_or(spd.label.clone(), |l| l.label.clone());
-    let (start, end) = (range.start_nm(), range.end_nm());
-    let mut grid_choice = None;
-    let mut selection = None;
-    let quadrature = match (a.tolerance, a.quadrature) {
-        (None, Some(QuadratureArg::Scene)) => anyhow::bail!(
-            "--quadrature scene fits the wavelengths to a colour tolerance: give --tolerance \
-             (e.g. --tolerance 0.5)"
-        ),
-        (Some(_), Some(QuadratureArg::Meyer)) => anyhow::bail!(
-            "--quadrature meyer has four fixed wavelengths: it cannot follow --tolerance"
-        ),
-        (None, Some(QuadratureArg::Meyer)) => Quadrature::meyer(observer)?,
-        (None, _) => Quadrature::uniform(range, rule, observer)?,
-        (Some(tolerance), Some(QuadratureArg::Uniform)) => {
-            let one = std::slice::from_ref(&stimulus);
-            let c = choose_grid(one, observer, start, end, rule, tolerance)?;
-            let q = Quadrature::uniform(c.chosen, rule, observer)?;
-            grid_choice = Some(c);
-            q
-        }
-        (Some(tolerance), _) => {
-            let (fit, held_out) = choose::for_colour(stimulus.clone(), &light_label)?;
-            let scene = choose::Scene {
-                fit: &fit,
-                held_out: &held_out,
-                observer,
-                start_nm: start,
-                end_nm: end,
-                white: White::OwnLight,
-            };
-            let s = choose::select(&scene, Family::Scene, &Options::new(tolerance)?)?;
-            let q = s.quadrature.clone();
-            selection = Some(s);
-            q
-        }
-    };
+    let (quadrature, grid_choice, selection) =
+        quadrature_for(&a, &stimulus, &light_label, observer, rule)?;
     let uniform = quadrature.uniform_grid();
-    let (xyz, white) = match uniform {
-        Some((grid, rule)) => {
-            let cmfs = Cmfs::new(observer, &grid)?;
-            let s = stimulus.light.resample(&grid, Interpolation::LIGHT);
-            match &under {
-                Some(_) => {
-                    let r = spd.data.resample(&grid, Interpolation::SMOOTH);
-                    (
-                        cmfs.reflectance_xyz(&r, &s, rule)?,
-                        cmfs.light_xyz(&s, rule)?,
-                    )
-                }
-                None => (cmfs.light_xyz(&s, rule)?, Xyz::from_xy(D65_XY)),
-            }
-        }
-        None => {
-            let (light, value) = stimulus.values_at(quadrature.nodes_nm())?;
-            let rel = |v: &[f64]| {
-                quadrature.relative_xyz(v, &light).ok_or_else(|| {
-                    anyhow::anyhow!(
-                        "{}: no visible energy at the wavelengths {quadrature}",
-                        light_label
-                    )
-                })
-            };
-            match &under {
-                Some(_) => (rel(&value)?, rel(&light)?),
-                None => (rel(&light)?, Xyz::from_xy(D65_XY)),
-            }
-        }
-    };
+    let (xyz, white) = colour(&stimulus, &quadrature, under.is_some(), &light_label)?;
     let under_label = under.map(|l| l.label);
     let xy = xyz.xy();
     let temperature = cct(xyz)?;
@@ -248,4 +183,85 @@ pub fn run(a: ColorArgs) -> anyhow::Result<()> {
     }
     super::emit(&out);
     Ok(())
+}
+
+/// The quadrature of `--quadrature`, `--tolerance`, `--range` and `--rule`, and what
+/// `--tolerance` chose (a uniform grid's choice, or the scene fit's selection).
+fn quadrature_for(
+    a: &ColorArgs,
+    stimulus: &Stimulus,
+    light_label: &str,
+    observer: Observer,
+    rule: Rule,
+) -> anyhow::Result<(Quadrature, Option<GridChoice>, Option<Selection>)> {
+    let range = a.spectral.range;
+    let (start, end) = (range.start_nm(), range.end_nm());
+    Ok(match (a.tolerance, a.quadrature) {
+        (None, Some(QuadratureArg::Scene)) => anyhow::bail!(
+            "--quadrature scene fits the wavelengths to a colour tolerance: give --tolerance \
+             (e.g. --tolerance 0.5)"
+        ),
+        (Some(_), Some(QuadratureArg::Meyer)) => anyhow::bail!(
+            "--quadrature meyer has four fixed wavelengths: it cannot follow --tolerance"
+        ),
+        (None, Some(QuadratureArg::Meyer)) => (Quadrature::meyer(observer)?, None, None),
+        (None, _) => (Quadrature::uniform(range, rule, observer)?, None, None),
+        (Some(tolerance), Some(QuadratureArg::Uniform)) => {
+            let one = std::slice::from_ref(stimulus);
+            let c = choose_grid(one, observer, start, end, rule, tolerance)?;
+            (
+                Quadrature::uniform(c.chosen, rule, observer)?,
+                Some(c),
+                None,
+            )
+        }
+        (Some(tolerance), _) => {
+            let (fit, held_out) = choose::for_colour(stimulus.clone(), light_label)?;
+            let scene = choose::Scene {
+                fit: &fit,
+                held_out: &held_out,
+                observer,
+                start_nm: start,
+                end_nm: end,
+                white: White::OwnLight,
+            };
+            let s = choose::select(&scene, Family::Scene, &Options::new(tolerance)?)?;
+            (s.quadrature.clone(), None, Some(s))
+        }
+    })
+}
+
+/// XYZ of the stimulus on the quadrature (Eq. 10/11: a white under the light is Y = 100) and
+/// its CIELAB white: the light for a reflectance, D65 for a light.
+fn colour(
+    stimulus: &Stimulus,
+    q: &Quadrature,
+    reflectance: bool,
+    light_label: &str,
+) -> anyhow::Result<(Xyz, Xyz)> {
+    if let Some((grid, rule)) = q.uniform_grid() {
+        let cmfs = Cmfs::new(q.observer(), &grid)?;
+        let s = stimulus.light.resample(&grid, Interpolation::LIGHT);
+        return Ok(match &stimulus.surface {
+            Surface::Reflectance(r) if reflectance => {
+                let r = r.resample(&grid, Interpolation::SMOOTH);
+                (
+                    cmfs.reflectance_xyz(&r, &s, rule)?,
+                    cmfs.light_xyz(&s, rule)?,
+                )
+            }
+            _ => (cmfs.light_xyz(&s, rule)?, Xyz::from_xy(D65_XY)),
+        });
+    }
+    let (light, value) = stimulus.values_at(q.nodes_nm())?;
+    let rel = |v: &[f64]| {
+        q.relative_xyz(v, &light).ok_or_else(|| {
+            anyhow::anyhow!("{light_label}: no visible energy at the wavelengths {q}")
+        })
+    };
+    Ok(if reflectance {
+        (rel(&value)?, rel(&light)?)
+    } else {
+        (rel(&light)?, Xyz::from_xy(D65_XY))
+    })
 }

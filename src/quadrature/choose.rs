@@ -233,9 +233,9 @@ pub fn for_colour(stimulus: Stimulus, light_label: &str) -> Result<(Vec<Stimulus
     Ok((fit, under(smooth_reflectances(425.0, 10.0)?)))
 }
 
-/// Smooth reflectances between 0.05 and 0.95 at 5 nm: rising and falling edges (logistic,
-/// 15 nm wide) and bumps (Gaussian, 25 and 50 nm wide) centred every `step_nm` from `first_nm`
-/// to 690 nm.
+/// Smooth reflectances between 0.05 and 0.95 at 5 nm, centred every `step_nm` from
+/// `first_nm` to 720 nm (where xbar fades: a red edge such as foliage's lies there): rising and
+/// falling edges (logistic, 15 and 50 nm wide) and bumps (Gaussian, 25, 50 and 100 nm wide).
 pub fn smooth_reflectances(
     first_nm: f64,
     step_nm: f64,
@@ -243,29 +243,25 @@ pub fn smooth_reflectances(
     let wl: Vec<f64> = (0..=80).map(|i| 380.0 + 5.0 * i as f64).collect();
     let mut out = Vec::new();
     let mut c = first_nm;
-    while c <= 690.0 {
-        let edge = |w: f64| 0.05 + 0.9 / (1.0 + (-(w - c) / 15.0).exp());
-        let bump = |w: f64, s: f64| 0.05 + 0.9 * (-0.5 * ((w - c) / s).powi(2)).exp();
-        let shapes = [
-            (
-                format!("edge up at {c} nm"),
-                wl.iter().map(|&w| edge(w)).collect(),
-            ),
-            (
-                format!("edge down at {c} nm"),
-                wl.iter().map(|&w| 1.0 - edge(w)).collect(),
-            ),
-            (
-                format!("25 nm bump at {c} nm"),
-                wl.iter().map(|&w| bump(w, 25.0)).collect(),
-            ),
-            (
-                format!("50 nm bump at {c} nm"),
-                wl.iter().map(|&w| bump(w, 50.0)).collect(),
-            ),
+    while c <= 720.0 {
+        let edge = |s: f64| move |w: f64| 1.0 / (1.0 + (-(w - c) / s).exp());
+        let bump = |s: f64| move |w: f64| (-0.5 * ((w - c) / s).powi(2)).exp();
+        let (sharp, slow) = (edge(15.0), edge(50.0));
+        let shapes: [(&str, &dyn Fn(f64) -> f64); 7] = [
+            ("edge up", &sharp),
+            ("edge down", &|w| 1.0 - sharp(w)),
+            ("slow edge up", &slow),
+            ("slow edge down", &|w| 1.0 - slow(w)),
+            ("25 nm bump", &bump(25.0)),
+            ("50 nm bump", &bump(50.0)),
+            ("100 nm bump", &bump(100.0)),
         ];
-        for (name, values) in shapes {
-            out.push((name, crate::spectrum::Tabulated::new(wl.clone(), values)?));
+        for (name, f) in shapes {
+            let values = wl.iter().map(|&w| 0.05 + 0.9 * f(w)).collect();
+            out.push((
+                format!("{name} at {c} nm"),
+                crate::spectrum::Tabulated::new(wl.clone(), values)?,
+            ));
         }
         c += step_nm;
     }
