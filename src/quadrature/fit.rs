@@ -463,3 +463,81 @@ fn prune(
     }
     Ok(best)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::colorimetry::Observer;
+    use crate::quadrature::estimate::White;
+    use crate::thinfilm::{Incidence, Index, Layer, Stack};
+    use crate::tradeoff::{Factor, Stimulus, Surface};
+
+    /// A 2.0-index film of `d` nm on glass at `deg` degrees under FL2, and FL2 itself.
+    fn films(thicknesses: &[f64], angles: &[f64]) -> Vec<Stimulus> {
+        let fl2 = crate::data::spectrum("FL2").unwrap().data;
+        let mut out = vec![Stimulus::emitter("FL2", fl2.clone())];
+        for &d in thicknesses {
+            let stack = Stack::new(
+                Index::real(1.0).unwrap().into(),
+                vec![Layer::new(Index::real(2.0).unwrap().into(), d).unwrap()],
+                Index::real(1.5).unwrap().into(),
+            );
+            for &deg in angles {
+                let f = Factor::FilmReflectance(stack.clone(), Incidence::degrees(deg).unwrap());
+                let name = format!("{d} nm at {deg} deg");
+                out.push(Stimulus::new(name, fl2.clone(), Surface::Product(vec![f])));
+            }
+        }
+        out
+    }
+
+    fn estimator(s: &[Stimulus]) -> Estimator {
+        Estimator::new(s, Observer::Cie1931, 380.0, 780.0, White::OwnLight).unwrap()
+    }
+
+    #[test]
+    fn a_fit_holds_on_stimuli_it_never_saw_and_a_starved_one_says_it_misses() {
+        let every = |a: f64, b: f64, step: f64| -> Vec<f64> {
+            (0..)
+                .map(|i| a + step * i as f64)
+                .take_while(|&x| x <= b)
+                .collect()
+        };
+        let fit_set = estimator(&films(&every(150.0, 450.0, 10.0), &[0.0, 30.0, 55.0, 75.0]));
+        let held = estimator(&films(
+            &every(155.0, 445.0, 10.0),
+            &[15.0, 45.0, 65.0, 85.0],
+        ));
+        let opts = Options::new(0.5).unwrap();
+        let c = fit(&fit_set, Some(&held), &opts).unwrap();
+        assert!(c.met && c.estimate_de2000 <= opts.target(), "{c:?}");
+        assert_eq!(c.lines_nm, [435.0, 545.0, 580.0]);
+        assert!(c.quadrature.len() <= 16, "{}", c.quadrature);
+        // Thicknesses and angles on neither grid.
+        let fresh = estimator(&films(&every(153.7, 450.0, 23.1), &[7.0, 38.0, 61.0, 80.0]));
+        let e = fresh.errors(&c.quadrature).unwrap();
+        let (i, max, _) = worst(&e);
+        assert!(max <= opts.tolerance, "{}: {max}", fresh.stimuli()[i].name);
+        // Two nodes cannot do it, and the choice says so rather than claiming the tolerance.
+        let starved = Options {
+            max_nodes: 2,
+            ..opts
+        };
+        let c = fit(&fit_set, Some(&held), &starved).unwrap();
+        assert!(!c.met && c.estimate_de2000 > opts.tolerance && c.quadrature.len() <= 2);
+    }
+
+    #[test]
+    fn lines_are_the_knots_that_carry_a_share_of_the_light() {
+        let one = |name: &str| {
+            let l = crate::data::spectrum(name).unwrap().data;
+            lines(&estimator(&[Stimulus::emitter(name, l)]))
+                .iter()
+                .map(|&j| 380 + j)
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(one("FL2"), [435, 545, 580]);
+        assert_eq!(one("lps"), [590]);
+        assert!(one("A").is_empty() && one("D65").is_empty());
+    }
+}
