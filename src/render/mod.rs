@@ -10,7 +10,7 @@
 //! - the environment is linear in four coefficients per direction (GUIDE.md):
 //!   `L(w, lambda) = sum_j c_j(w) B_j(lambda) + c_3(w) E(lambda)`, `B_j` the fitted basis spectra
 //!   of the main light, `E` the sun's (or, for a uniform light, the main light's) SPD, all scaled
-//!   to luminance Y = 1 on the render grid. Lighting integrals are taken in coefficient space on
+//!   to luminance Y = 1 on the render's wavelengths. Lighting integrals are taken in coefficient space on
 //!   the CPU ([`env`]): a diffuse irradiance map `D(N) = 1/pi int L max(N.w, 0) dw` and, per
 //!   shininess `n`, a specular map `P_n(R) = int L (R.w)^n dw / int (R.w)^n dw`, both lat-long;
 //!   the renderers expand the sampled coefficients with the spectra per wavelength;
@@ -24,8 +24,10 @@
 //!   without a film `k_s' = k_s`, `T_f = 1`;
 //! - a transparent surface (Eq. 9) is thin-walled: `I = R_f [P_n(R_v) + sun lobe] + T_f L(d)`,
 //!   `L(d)` the environment behind, along the view ray `d`;
-//! - `XYZ = sum_i w_i I(lambda_i) cmf(lambda_i) / sum_i w_i ybar(lambda_i)` by the chosen
-//!   integration rule (Eq. 10/11: a perfect white under the main light has Y = 1), then linear
+//! - `XYZ = sum_i W_i I(lambda_i) / sum_i W_y,i` over the nodes `lambda_i` of a quadrature
+//!   ([`crate::quadrature`]) with a weight triple `W_i` per node: for a uniform grid
+//!   `W_i = w_i cmf(lambda_i)` by the chosen integration rule, for a scene's quadrature the
+//!   fitted weights (Eq. 10/11: a perfect white under the main light has Y = 1); then linear
 //!   RGB by the output space's matrix. No white balance: a scene under illuminant A looks warm.
 //!
 //! Both backends consume the same [`prepare::Prepared`] data (f32 spectra, maps and objects); the
@@ -170,7 +172,7 @@ pub struct Lighting {
     /// The basis reflectances (the paper's ColorChecker red, green, blue).
     pub basis_reflectance: [Tabulated; 3],
     /// `E`, the SPD of the fourth coefficient: the sun's for a map, the main light's for a uniform
-    /// or sky-and-ground environment. On the render grid `B_j = MCC_j * light * k` with `k`
+    /// or sky-and-ground environment. At the render's wavelengths `B_j = MCC_j * light * k` with `k`
     /// making the light Y = 1, and `E` is scaled to Y = 1 (as
     /// [`crate::envmap::engine::Engine`] does).
     pub e_spd: Tabulated,

@@ -32,7 +32,7 @@ pub struct Params {
     pub n_wl: u32,
     pub n_objects: u32,
     pub background: u32,
-    /// Offset in `spectra` of the weighted CMFs x, y, z (n_wl each).
+    /// Offset in `spectra` of the quadrature's x, y, z weights over `sum w_y` (n_wl each).
     pub cmf_offset: u32,
     pub wl_offset: u32,
     pub _pad: u32,
