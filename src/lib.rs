@@ -9,6 +9,7 @@
 //! - [`render`]: spectral preview renderer (Eq. 1 Phong + thin films), wgpu compute and CPU;
 //! - [`rendition`]: colour rendition of a spectral map against its truth (patches, CAT02, CIEDE2000);
 //! - [`tradeoff`]: colour error against time for wavelength grids and rules; `--tolerance`;
+//! - [`quadrature`]: nodes and weight triples (uniform, Meyer's, fitted to a scene's spectra);
 //! - [`plot`], [`io`]: PNG/SVG plots and safe (temporary file + rename) output.
 
 pub mod batch;
@@ -20,6 +21,7 @@ pub mod fit;
 pub mod illuminant;
 pub mod io;
 pub mod plot;
+pub mod quadrature;
 pub mod render;
 pub mod rendition;
 pub mod spectrum;

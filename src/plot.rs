@@ -119,13 +119,31 @@ where
         .label_style(("sans-serif", 14))
         .draw()
         .map_err(e)?;
-    for s in &figure.series {
+    for (i, s) in figure.series.iter().enumerate() {
         let c = RGBColor(s.color[0], s.color[1], s.color[2]);
-        chart
+        let drawn = chart
             .draw_series(LineSeries::new(s.points.iter().copied(), c.stroke_width(2)))
             .map_err(e)?
-            .label(s.label.clone())
-            .legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], c.stroke_width(3)));
+            .label(s.label.clone());
+        if s.points.len() > MAX_MARKED_POINTS {
+            drawn.legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], c.stroke_width(3)));
+            continue;
+        }
+        // A marker at each measured point, its shape by curve, so that curves which coincide
+        // stay visible and the measured points stand out from the lines joining them.
+        let shape = Marker::of(i);
+        drawn.legend(move |(x, y)| {
+            EmptyElement::at((x + 9, y))
+                + PathElement::new([(-9, 0), (9, 0)], c.stroke_width(3))
+                + shape.element(c)
+        });
+        chart
+            .draw_series(
+                s.points
+                    .iter()
+                    .map(|&p| EmptyElement::at(p) + shape.element(c)),
+            )
+            .map_err(e)?;
     }
     if figure.series.len() > 1 {
         chart
@@ -139,6 +157,34 @@ where
     }
     root.present().map_err(e)?;
     Ok(())
+}
+
+/// Curves with at most this many points get a marker at each (measurements, not spectra).
+pub const MAX_MARKED_POINTS: usize = 40;
+
+/// The markers, one per curve in turn: circles of different sizes, open or filled, so that
+/// markers of coinciding curves stay apart (a small disc inside a ring inside a larger ring).
+#[derive(Debug, Clone, Copy)]
+struct Marker {
+    radius: i32,
+    filled: bool,
+}
+
+impl Marker {
+    fn of(i: usize) -> Marker {
+        let (radius, filled) = [(5, false), (2, true), (8, false), (4, true)][i % 4];
+        Marker { radius, filled }
+    }
+
+    /// The marker at the origin of an element, in colour `c`.
+    fn element(self, c: RGBColor) -> Circle<(i32, i32), i32> {
+        let style = if self.filled {
+            c.filled()
+        } else {
+            c.stroke_width(2)
+        };
+        Circle::new((0, 0), self.radius, style)
+    }
 }
 
 /// A distinct colour for curve `i` of `n` when the data have no colour of their own.
@@ -192,6 +238,14 @@ mod tests {
             .map(|b| String::from_utf8_lossy(&b).contains("Wavelength"))
             .unwrap());
         assert!(write(&fig, &dir.path().join("f.jpg")).is_err());
+        // Two-point curves are measurements: a marker at each point and in each legend entry,
+        // a ring for the first curve and a disc for the second.
+        let svg = String::from_utf8(std::fs::read(dir.path().join("f.svg")).unwrap()).unwrap();
+        assert_eq!(svg.matches("<circle").count(), 2 * (2 + 1), "{svg}");
+        assert_eq!(
+            svg.matches("r=\"5\" opacity=\"1\" fill=\"none\"").count(),
+            3
+        );
         // Nothing but the two plots is left behind (no temporary files).
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
     }

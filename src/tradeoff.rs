@@ -33,6 +33,74 @@ pub enum Surface {
         incidence: Incidence,
         coherence: Coherence,
     },
+    /// Everything the light passes through, multiplied: a basis reflectance of the map, a
+    /// film's reflectance or transmittance, a pigment (films coherent, unpolarised light).
+    Product(Vec<Factor>),
+}
+
+/// One factor of a [`Surface::Product`].
+// Tens of factors per scene: boxing the film would buy nothing.
+#[allow(clippy::large_enum_variant)]
+#[derive(Debug, Clone)]
+pub enum Factor {
+    /// A tabulated reflectance factor (smooth data).
+    Reflectance(Tabulated),
+    /// The film's reflectance at an incidence angle.
+    FilmReflectance(Stack, Incidence),
+    /// The power the film lets through to what lies under it, at an incidence angle.
+    FilmTransmittance(Stack, Incidence),
+}
+
+impl Factor {
+    /// The factor at each wavelength.
+    fn values_at(&self, wavelengths_nm: &[f64]) -> Result<Vec<f64>> {
+        match self {
+            Factor::Reflectance(r) => Ok(sample(r, wavelengths_nm, Interpolation::SMOOTH)),
+            Factor::FilmReflectance(stack, incidence)
+            | Factor::FilmTransmittance(stack, incidence) => {
+                let reflect = matches!(self, Factor::FilmReflectance(..));
+                wavelengths_nm
+                    .iter()
+                    .map(|&wl| {
+                        let rt = stack
+                            .at::<f64>(wl)?
+                            .rt(incidence, Polarization::Unpolarized);
+                        Ok(if reflect { rt.r } else { rt.t })
+                    })
+                    .collect()
+            }
+        }
+    }
+}
+
+/// `t` at arbitrary wavelengths by `method` (one uniform grid when they form one).
+pub fn sample(t: &Tabulated, wavelengths_nm: &[f64], method: Interpolation) -> Vec<f64> {
+    if let Some(grid) = uniform_grid(wavelengths_nm) {
+        return t.resample(&grid, method).values().to_vec();
+    }
+    wavelengths_nm
+        .iter()
+        .map(|&w| match WavelengthGrid::new(w, w, 1.0) {
+            Ok(g) => t.resample(&g, method).values()[0],
+            Err(_) => f64::NAN,
+        })
+        .collect()
+}
+
+/// The uniform grid the wavelengths form, if they do (two or more, equally spaced).
+fn uniform_grid(wavelengths_nm: &[f64]) -> Option<WavelengthGrid> {
+    let (first, last) = (*wavelengths_nm.first()?, *wavelengths_nm.last()?);
+    if wavelengths_nm.len() < 2 {
+        return None;
+    }
+    let step = (last - first) / (wavelengths_nm.len() - 1) as f64;
+    let grid = WavelengthGrid::new(first, last, step).ok()?;
+    (grid.len() == wavelengths_nm.len()
+        && grid
+            .wavelengths_nm()
+            .zip(wavelengths_nm)
+            .all(|(a, b)| (a - b).abs() <= 1e-9 * b.abs()))
+    .then_some(grid)
 }
 
 /// A light and what it falls on.
@@ -41,16 +109,75 @@ pub struct Stimulus {
     pub name: String,
     pub light: Tabulated,
     pub surface: Surface,
+    /// How bright it appears, in units of its light's perfect white (1: as bright as a white
+    /// surface under the light). Colour errors grow with brightness, so a quadrature's estimate
+    /// ([`crate::quadrature`]) is taken at this brightness; [`choose_grid`] ignores it.
+    pub gain: f64,
 }
 
 impl Stimulus {
-    /// The light seen directly.
-    pub fn emitter(name: impl Into<String>, light: Tabulated) -> Stimulus {
+    /// `light` falling on `surface`, at gain 1.
+    pub fn new(name: impl Into<String>, light: Tabulated, surface: Surface) -> Stimulus {
         Stimulus {
             name: name.into(),
             light,
-            surface: Surface::Emitter,
+            surface,
+            gain: 1.0,
         }
+    }
+
+    /// The light seen directly.
+    pub fn emitter(name: impl Into<String>, light: Tabulated) -> Stimulus {
+        Stimulus::new(name, light, Surface::Emitter)
+    }
+
+    /// The same stimulus at another brightness.
+    pub fn with_gain(self, gain: f64) -> Stimulus {
+        Stimulus { gain, ..self }
+    }
+
+    /// The light and the stimulus (light times surface) at each wavelength.
+    pub fn values_at(&self, wavelengths_nm: &[f64]) -> Result<(Vec<f64>, Vec<f64>)> {
+        let light = sample(&self.light, wavelengths_nm, Interpolation::LIGHT);
+        let factor = self.surface_at(wavelengths_nm)?;
+        let total = light.iter().zip(&factor).map(|(l, f)| l * f).collect();
+        Ok((light, total))
+    }
+
+    /// What the surface passes of the light at each wavelength (1 for an emitter).
+    pub fn surface_at(&self, wavelengths_nm: &[f64]) -> Result<Vec<f64>> {
+        Ok(match &self.surface {
+            Surface::Emitter => vec![1.0; wavelengths_nm.len()],
+            Surface::Reflectance(r) => sample(r, wavelengths_nm, Interpolation::SMOOTH),
+            Surface::Film {
+                stack,
+                incidence,
+                coherence,
+            } => match uniform_grid(wavelengths_nm) {
+                Some(grid) => {
+                    stack
+                        .response(
+                            &grid,
+                            incidence,
+                            Polarization::Unpolarized,
+                            coherence.clone(),
+                        )?
+                        .reflectance
+                }
+                None => {
+                    Factor::FilmReflectance(stack.clone(), *incidence).values_at(wavelengths_nm)?
+                }
+            },
+            Surface::Product(factors) => {
+                let mut v = vec![1.0; wavelengths_nm.len()];
+                for f in factors {
+                    for (a, b) in v.iter_mut().zip(f.values_at(wavelengths_nm)?) {
+                        *a *= b;
+                    }
+                }
+                v
+            }
+        })
     }
 
     /// XYZ (Y = 100 for the light's perfect white) with everything sampled on the CMFs' grid.
@@ -62,18 +189,9 @@ impl Stimulus {
             Surface::Reflectance(r) => {
                 cmfs.reflectance_xyz(&r.resample(grid, Interpolation::SMOOTH), &light, rule)
             }
-            Surface::Film {
-                stack,
-                incidence,
-                coherence,
-            } => {
-                let response = stack.response(
-                    grid,
-                    incidence,
-                    Polarization::Unpolarized,
-                    coherence.clone(),
-                )?;
-                let r = Spectrum::new(*grid, response.reflectance)?;
+            Surface::Film { .. } | Surface::Product(_) => {
+                let wavelengths: Vec<f64> = grid.wavelengths_nm().collect();
+                let r = Spectrum::new(*grid, self.surface_at(&wavelengths)?)?;
                 cmfs.reflectance_xyz(&r, &light, rule)
             }
         }
@@ -86,11 +204,11 @@ pub fn colorchecker_under(light_name: &str, light: &Tabulated) -> Result<Vec<Sti
     let table = data::Table::load("colorchecker")?;
     let mut out = vec![Stimulus::emitter(light_name, light.clone())];
     for (i, column) in table.columns().iter().enumerate() {
-        out.push(Stimulus {
-            name: format!("{column} under {light_name}"),
-            light: light.clone(),
-            surface: Surface::Reflectance(table.column_at(i)?),
-        });
+        out.push(Stimulus::new(
+            format!("{column} under {light_name}"),
+            light.clone(),
+            Surface::Reflectance(table.column_at(i)?),
+        ));
     }
     Ok(out)
 }
@@ -327,15 +445,15 @@ mod tests {
             .unwrap()],
             Material::constant(crate::thinfilm::Index::real(1.0).unwrap()),
         );
-        Stimulus {
-            name: format!("{thickness_nm} nm film"),
-            light: light("D65"),
-            surface: Surface::Film {
+        Stimulus::new(
+            format!("{thickness_nm} nm film"),
+            light("D65"),
+            Surface::Film {
                 stack,
                 incidence: Incidence::degrees(0.0).unwrap(),
                 coherence: Coherence::Coherent,
             },
-        }
+        )
     }
 
     #[test]

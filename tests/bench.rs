@@ -24,7 +24,7 @@ fn quick_bench_measures_every_knob() {
             .unwrap_or_else(|| panic!("no row {section} / {case} / {setting}"))
     };
     let max = |r: &serde_json::Value| r["max_dE2000"].as_f64();
-    for section in ["grid", "film", "mode", "render"] {
+    for section in ["grid", "film", "mode", "render", "quadrature"] {
         assert!(rows.iter().any(|r| r["section"] == section), "{section}");
     }
     // 1 nm Simpson is the reference itself.
@@ -46,6 +46,30 @@ fn quick_bench_measures_every_knob() {
     assert!(
         max(find("film", "10000 nm film, coherent", "20 nm, riemann")).unwrap()
             > 5.0 * max(find("film", "100 nm film, coherent", "20 nm, riemann")).unwrap()
+    );
+    // Quadratures, on the image against the 1 nm render: the scene's meets the tolerance with
+    // at most a third of the uniform grid's nodes; Meyer's four wavelengths miss it by far.
+    let nodes = |r: &serde_json::Value| r["samples"].as_u64().unwrap();
+    for light in ["D65", "FL2"] {
+        let case = format!("ball 24x24 under {light}");
+        let scene = find("quadrature", &case, "scene, tolerance 0.5");
+        let uniform = find("quadrature", &case, "uniform, tolerance 0.5");
+        let meyer = find("quadrature", &case, "meyer");
+        assert!(
+            max(scene).unwrap() <= 0.5 && max(uniform).unwrap() <= 0.5,
+            "{case}"
+        );
+        assert!(3 * nodes(scene) <= nodes(uniform), "{case}");
+        assert!(nodes(meyer) == 4 && max(meyer).unwrap() > 5.0, "{case}");
+        assert!(scene["estimate_dE2000"].as_f64().unwrap() <= 0.5);
+    }
+    // The header says how long the run took (a quick run is not "0 s").
+    let md = std::fs::read_to_string(dir.path().join("bench.md")).unwrap();
+    let seconds = doc["seconds"].as_f64().unwrap();
+    assert!(
+        seconds > 0.0 && !md.contains(" 0 s in all"),
+        "{}",
+        &md[..200]
     );
     for f in [
         "bench.md",

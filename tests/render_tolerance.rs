@@ -1,60 +1,95 @@
-//! `render --tolerance`: the grid chosen from the scene's stimuli (lights, pigments, films) gives
-//! a render whose colours stay within the tolerance of the 1 nm render, measured on the image.
+//! `render --tolerance`: the quadrature chosen from the scene's stimuli (lights, pigments, films
+//! over their angles and thicknesses) gives a render whose every pixel stays within the
+//! tolerance of the 1 nm render, measured on the image, not on the estimate; and it needs far
+//! fewer wavelengths than the uniform grid chosen for the same tolerance.
 
-use specmap::colorimetry::Observer;
-use specmap::render::{compare, Preset, Spectral};
-use specmap::spectrum::Rule;
-use specmap::tradeoff::choose_grid;
+use specmap::colorimetry::{Observer, RgbSpace};
+use specmap::quadrature::choose::{Family, Selection};
+use specmap::quadrature::fit::Options;
+use specmap::quadrature::{Kind, Quadrature};
+use specmap::render::{compare, Preset, Scene};
+use specmap::spectrum::{Rule, WavelengthGrid};
 
 const TOL: f64 = 0.5;
 
-fn check(preset: Preset, w: usize, h: usize) -> f64 {
-    let scene = preset.scene(w, h, "D65", None).unwrap();
-    let choice = choose_grid(
-        &scene.stimuli().unwrap(),
-        Observer::Cie1931,
-        380.0,
-        780.0,
-        Rule::Riemann,
-        TOL,
-    )
-    .unwrap();
-    assert!(choice.met, "{preset:?}: {choice:?}");
-    let chosen = Spectral {
-        grid: choice.chosen,
-        ..Spectral::default()
-    };
-    let reference = Spectral {
-        grid: "380:780:1".parse().unwrap(),
-        rule: Rule::Simpson,
-        ..Spectral::default()
-    };
-    let a = scene.render_cpu(&chosen).unwrap();
-    let b = scene.render_cpu(&reference).unwrap();
-    let c = compare(&a, &b, &chosen.space).unwrap();
-    // The estimate bounds the stimuli; the image mixes them (environment, sun, films at every
-    // angle), so its mean must be within the tolerance and no pixel far beyond it.
-    assert!(
-        c.mean <= TOL,
-        "{preset:?} at {} nm: mean {}",
-        choice.step_nm,
-        c.mean
+fn scene(preset: Preset, light: &str, width: usize) -> Scene {
+    let (w, h) = preset.default_size();
+    preset.scene(width, width * h / w, light, None).unwrap()
+}
+
+fn choose(scene: &Scene, family: Family) -> Selection {
+    let opts = Options::new(TOL).unwrap();
+    scene
+        .choose_quadrature(Observer::Cie1931, RgbSpace::SRGB, family, &opts)
+        .unwrap()
+}
+
+/// The largest CIEDE2000 of the render on `q` against the 1 nm Simpson render.
+fn image_error(scene: &Scene, q: &Quadrature) -> f64 {
+    let grid = WavelengthGrid::new(380.0, 780.0, 1.0).unwrap();
+    let reference = Quadrature::uniform(grid, Rule::Simpson, Observer::Cie1931).unwrap();
+    let a = scene.render_cpu_with(q, RgbSpace::SRGB).unwrap();
+    let b = scene.render_cpu_with(&reference, RgbSpace::SRGB).unwrap();
+    let c = compare(&a, &b, &RgbSpace::SRGB).unwrap();
+    assert_eq!(c.non_finite, 0);
+    c.max
+}
+
+/// Fits, renders, and checks the image against the tolerance; returns the node count.
+fn check(preset: Preset, light: &str, width: usize) -> usize {
+    let s = scene(preset, light, width);
+    let c = choose(&s, Family::Scene);
+    assert!(c.met, "{preset:?} under {light}: {c:?}");
+    assert_eq!(
+        c.kind,
+        Kind::Scene,
+        "{preset:?} under {light}: {}",
+        c.reason
+    );
+    let max = image_error(&s, &c.quadrature);
+    eprintln!(
+        "{preset:?} under {light}: {} nodes, estimate {:.3}, image max {max:.3}; uniform {} ({})",
+        c.quadrature.len(),
+        c.estimate_de2000,
+        c.uniform.grid,
+        c.uniform.samples
     );
     assert!(
-        c.max <= 2.0 * TOL,
-        "{preset:?} at {} nm: max {}",
-        choice.step_nm,
-        c.max
+        max <= TOL,
+        "{preset:?} under {light}: {} gives {max} on the image",
+        c.quadrature
     );
-    choice.step_nm
+    // The uniform grid chosen for the same tolerance needs at least three times the nodes.
+    assert!(c.uniform.met && c.uniform.samples >= 3 * c.quadrature.len());
+    c.quadrature.len()
 }
 
 #[test]
-fn chosen_grids_keep_every_preset_within_the_tolerance() {
-    let ball = check(Preset::Ball, 24, 24);
-    check(Preset::TransparentBall, 32, 16);
-    check(Preset::Cylinders, 24, 24);
-    let chart = check(Preset::Chart, 48, 32);
-    // The chart's low-pressure sodium row needs a finer grid than the ball under D65.
-    assert!(chart < ball, "chart {chart} nm, ball {ball} nm");
+fn the_ball_meets_the_tolerance_on_the_image_under_smooth_and_spiky_lights() {
+    let d65 = check(Preset::Ball, "D65", 32);
+    let fl2 = check(Preset::Ball, "FL2", 32);
+    let lps = check(Preset::Ball, "lps", 32);
+    assert!(d65 <= 8 && fl2 <= 16 && lps <= 4, "{d65} {fl2} {lps}");
+}
+
+#[test]
+fn the_transparent_ball_and_the_chart_meet_the_tolerance_on_the_image() {
+    assert!(check(Preset::TransparentBall, "D65", 32) <= 8);
+    assert!(check(Preset::TransparentBall, "hps", 32) <= 16);
+    assert!(check(Preset::Chart, "D65", 48) <= 16);
+}
+
+#[test]
+fn the_cylinders_meet_the_tolerance_on_the_image() {
+    // A thickness ramp of 100-400 nm: the most varied spectra of the presets.
+    assert!(check(Preset::Cylinders, "FL11", 24) <= 16);
+}
+
+#[test]
+fn a_uniform_choice_meets_the_tolerance_too() {
+    let s = scene(Preset::Ball, "FL2", 24);
+    let c = choose(&s, Family::Uniform);
+    assert_eq!(c.kind, Kind::Uniform);
+    assert!(c.met && c.scene.is_none());
+    assert!(image_error(&s, &c.quadrature) <= TOL);
 }

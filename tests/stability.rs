@@ -284,3 +284,74 @@ fn renderer_stays_finite_for_extreme_films_and_grazing_views() {
         .flatten()
         .all(|v| v.is_finite()));
 }
+
+/// A quadrature on `nodes` with the CMFs at each node as weights (as a fit could set them).
+fn quadrature(nodes: &[f64]) -> specmap::quadrature::Quadrature {
+    let weights = nodes
+        .iter()
+        .map(|&w| {
+            let g = WavelengthGrid::new(w, w, 1.0).unwrap();
+            let c = specmap::colorimetry::Cmfs::new(Observer::Cie1931, &g).unwrap();
+            [c.x.values()[0], c.y.values()[0], c.z.values()[0]].map(|v| 10.0 * v)
+        })
+        .collect();
+    specmap::quadrature::Quadrature::new(
+        specmap::quadrature::Kind::Scene,
+        Observer::Cie1931,
+        nodes.to_vec(),
+        weights,
+    )
+    .unwrap()
+}
+
+#[test]
+fn quadratures_with_nodes_at_the_range_ends_and_on_lines_stay_finite() {
+    // Nodes at 380 and 780 nm (where the CMFs nearly vanish), on low-pressure sodium's line,
+    // one node alone, two nodes a thousandth of a nm apart, Meyer's off-grid nodes, and a fitted
+    // quadrature's weights (some negative), on every preset, on the CPU and the GPU.
+    let mut sets = vec![
+        quadrature(&[380.0, 780.0]),
+        quadrature(&[380.0, 589.0, 590.0, 780.0]),
+        quadrature(&[590.0]),
+        quadrature(&[545.0, 545.001]),
+        specmap::quadrature::Quadrature::meyer(Observer::Cie1931).unwrap(),
+    ];
+    let scene = Preset::Ball.scene(12, 12, "FL2", None).unwrap();
+    let opts = specmap::quadrature::fit::Options::new(0.5).unwrap();
+    let fitted = scene
+        .choose_quadrature(
+            Observer::Cie1931,
+            RgbSpace::SRGB,
+            specmap::quadrature::choose::Family::Scene,
+            &opts,
+        )
+        .unwrap()
+        .quadrature;
+    sets.push(fitted);
+    for q in &sets {
+        for preset in Preset::ALL {
+            for light in ["D65", "FL2", "lps"] {
+                let scene = preset.scene(16, 12, light, None).unwrap();
+                let what = format!("{preset:?} under {light} on {q}");
+                let p = match Prepared::with_quadrature(&scene, q, RgbSpace::SRGB) {
+                    Ok(p) => p,
+                    Err(e) => {
+                        // Only a light the nodes do not see at all may be refused, by name.
+                        assert!(e.to_string().contains("no visible energy"), "{what}: {e}");
+                        assert!(q.nodes_nm().iter().all(|&w| !(585.0..=595.0).contains(&w)));
+                        continue;
+                    }
+                };
+                let img = specmap::render::cpu::render(&p);
+                assert!(img.pixels.iter().flatten().all(|v| v.is_finite()), "{what}");
+                if let Some(g) = gpu() {
+                    let (img, _) = g.render(&p).unwrap();
+                    assert!(
+                        img.pixels.iter().flatten().all(|v| v.is_finite()),
+                        "GPU {what}"
+                    );
+                }
+            }
+        }
+    }
+}

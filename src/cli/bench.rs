@@ -17,6 +17,8 @@ use specmap::tradeoff::{colorchecker_under, measure, Reference, Stimulus, Surfac
 use std::path::PathBuf;
 use std::time::Instant;
 
+mod quadrature;
+
 #[derive(Debug, Args)]
 #[command(after_help = "\
 Examples:
@@ -32,9 +34,27 @@ pub struct BenchArgs {
     /// Folder for bench.md, bench.json and the plots (grid.png, film.png, render.png).
     #[arg(long, value_name = "DIR")]
     report: Option<PathBuf>,
-    /// Renderer for the sample-count rows.
+    /// Renderer for the sample-count and quadrature rows.
     #[arg(long, value_enum, default_value_t = BackendArg::Auto)]
     backend: BackendArg,
+    /// Measure only these sections (default: all).
+    #[arg(long, value_enum, value_delimiter = ',', value_name = "SECTION")]
+    only: Vec<Section>,
+}
+
+/// The sections of the report.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum Section {
+    /// wavelength step and integration rule
+    Grid,
+    /// thin films from 100 nm to 10 um
+    Film,
+    /// upsampling modes
+    Mode,
+    /// render sample counts
+    Render,
+    /// quadratures (uniform, Meyer's, the scene's) on every preset and light
+    Quadrature,
 }
 
 /// One measured setting.
@@ -51,6 +71,10 @@ struct Row {
     mean: Option<f64>,
     #[serde(rename = "max_dE2000")]
     max: Option<f64>,
+    /// Quadrature rows: the GPU frame (ms), and the estimate the quadrature was chosen by.
+    gpu_ms: Option<f64>,
+    #[serde(rename = "estimate_dE2000")]
+    estimate: Option<f64>,
     note: String,
 }
 
@@ -87,76 +111,187 @@ pub fn run(a: BenchArgs) -> anyhow::Result<()> {
     }
     let t0 = Instant::now();
     let quick = a.quick;
-    let min_s = if quick { 0.005 } else { 0.05 };
-    let steps: &[f64] = if quick {
-        &[1.0, 5.0, 10.0, 20.0]
+    let wanted = |s: Section| a.only.is_empty() || a.only.contains(&s);
+    let gpu = if wanted(Section::Render) || wanted(Section::Quadrature) {
+        gpu_for(a.backend)?
     } else {
-        &[1.0, 2.0, 5.0, 10.0, 20.0]
+        None
     };
+    let cpu = a.backend != BackendArg::Gpu;
     let mut rows = Vec::new();
+    if wanted(Section::Grid) {
+        rows.extend(grid_rows(quick)?);
+    }
+    if wanted(Section::Film) {
+        rows.extend(film_rows(quick)?);
+    }
+    if wanted(Section::Mode) {
+        rows.extend(mode_rows(quick)?);
+    }
+    let mut reports = Vec::new();
+    if wanted(Section::Render) {
+        reports = render_reports(quick, gpu.as_ref(), cpu)?;
+        rows.extend(render_rows(&reports));
+    }
+    if wanted(Section::Quadrature) {
+        rows.extend(quadrature::rows(quick, gpu.as_ref(), cpu)?);
+    }
 
-    // 1. Wavelength step x integration rule, for each light and the ColorChecker under it.
+    let seconds = t0.elapsed().as_secs_f64();
+    let table = markdown(&rows, seconds, quick);
+    let doc = serde_json::json!({
+        "quick": quick,
+        "seconds": seconds,
+        "threads": rayon::current_num_threads(),
+        "reference": "380..780 nm at 1 nm, Simpson's rule (render and quadrature: the 1 nm render)",
+        "rows": rows,
+    });
+    if let Some(dir) = &a.report {
+        write_report(dir, &table, &doc, &rows, &reports)?;
+    }
+    if a.json {
+        super::emit(&(serde_json::to_string_pretty(&doc)? + "\n"));
+    } else {
+        super::emit(&table);
+    }
+    Ok(())
+}
+
+/// `--report DIR`: bench.md, bench.json and the plots of the sections measured.
+fn write_report(
+    dir: &std::path::Path,
+    table: &str,
+    doc: &serde_json::Value,
+    rows: &[Row],
+    reports: &[sweep::SweepReport],
+) -> anyhow::Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    specmap::io::write_atomic(&dir.join("bench.md"), table.as_bytes())?;
+    specmap::io::write_atomic(
+        &dir.join("bench.json"),
+        (serde_json::to_string_pretty(doc)? + "\n").as_bytes(),
+    )?;
+    let mut written = vec!["bench.md", "bench.json"];
+    if rows.iter().any(|r| r.section == "grid") {
+        plot::write(&error_count_figure(rows, "grid"), &dir.join("grid.png"))?;
+        written.push("grid.png");
+    }
+    if rows.iter().any(|r| r.section == "film") {
+        plot::write(&film_figure(rows), &dir.join("film.png"))?;
+        written.push("film.png");
+    }
+    if !reports.is_empty() {
+        sweep::plot(reports, &dir.join("render.png")).context("writing the render plot")?;
+        written.push("render.png");
+    }
+    eprintln!("wrote {}/{}", dir.display(), written.join(", "));
+    Ok(())
+}
+
+/// The GPU of `--backend` (auto: if an adapter exists, with a notice when none does).
+fn gpu_for(backend: BackendArg) -> anyhow::Result<Option<Gpu>> {
+    Ok(match backend {
+        BackendArg::Cpu => None,
+        BackendArg::Gpu => Some(Gpu::new().context("--backend gpu")?),
+        BackendArg::Auto => Gpu::new()
+            .map_err(|e| {
+                eprintln!(
+                    "note: no GPU adapter, the render rows use the CPU renderer: {}",
+                    e.to_string().lines().next().unwrap_or_default()
+                )
+            })
+            .ok(),
+    })
+}
+
+/// Section 1, wavelength step x integration rule, for each light and the ColorChecker under it.
+fn grid_rows(quick: bool) -> anyhow::Result<Vec<Row>> {
     let lights: &[&str] = if quick {
         &["D65", "FL2", "lps"]
     } else {
         &LIGHTS
     };
+    let mut rows = Vec::new();
     for &name in lights {
         eprintln!("bench: grid and rule, {name}");
         let light = data::spectrum(name)?;
         let stimuli = colorchecker_under(&light.label, &light.data)?;
         let reference = Reference::new(&stimuli, Observer::Cie1931, 380.0, 780.0)?;
-        for &step in steps {
+        for &step in steps(quick) {
             let grid = WavelengthGrid::new(380.0, 780.0, step)?;
             for rule in RULES {
                 rows.push(grid_row(
-                    "grid", name, &reference, &stimuli, &grid, rule, min_s,
+                    "grid",
+                    name,
+                    &reference,
+                    &stimuli,
+                    &grid,
+                    rule,
+                    min_seconds(quick),
                 ));
             }
         }
     }
+    Ok(rows)
+}
 
-    // 2. Thin films from 100 nm to 10 um: a soap-like film (n = 1.33) in air, normal incidence,
-    // under D65, coherent at every step (the fringes alias on coarse grids) and with the
-    // thin-film module's automatic incoherent fallback.
+fn steps(quick: bool) -> &'static [f64] {
+    if quick {
+        &[1.0, 5.0, 10.0, 20.0]
+    } else {
+        &[1.0, 2.0, 5.0, 10.0, 20.0]
+    }
+}
+
+fn min_seconds(quick: bool) -> f64 {
+    if quick {
+        0.005
+    } else {
+        0.05
+    }
+}
+
+/// Section 2, thin films from 100 nm to 10 um: a soap-like film (n = 1.33) in air, normal
+/// incidence, under D65, coherent at every step (the fringes alias on coarse grids) and with
+/// the thin-film module's automatic incoherent fallback.
+fn film_rows(quick: bool) -> anyhow::Result<Vec<Row>> {
     let thicknesses: &[f64] = if quick {
         &[100.0, 1000.0, 10000.0]
     } else {
         &[100.0, 300.0, 1000.0, 3000.0, 10000.0]
     };
     let d65 = data::spectrum("D65")?;
+    let film = |d: f64, coherence: Coherence| -> anyhow::Result<Surface> {
+        Ok(Surface::Film {
+            stack: soap_film(d)?,
+            incidence: Incidence::degrees(0.0)?,
+            coherence,
+        })
+    };
+    let mut rows = Vec::new();
     for &d in thicknesses {
         eprintln!("bench: film {d} nm");
+        // The reference is coherent at 1 nm whatever the setting.
+        let truth = [Stimulus::new(
+            "",
+            d65.data.clone(),
+            film(d, Coherence::Coherent)?,
+        )];
+        let reference = Reference::new(&truth, Observer::Cie1931, 380.0, 780.0)?;
         for (coherence, label) in [(Coherence::Coherent, "coherent"), (Coherence::Auto, "auto")] {
-            let stimuli = vec![Stimulus {
-                name: format!("{d} nm film ({label})"),
-                light: d65.data.clone(),
-                surface: Surface::Film {
-                    stack: soap_film(d)?,
-                    incidence: Incidence::degrees(0.0)?,
-                    coherence: coherence.clone(),
-                },
-            }];
-            // The reference is coherent at 1 nm whatever the setting.
-            let truth = vec![Stimulus {
-                surface: Surface::Film {
-                    stack: soap_film(d)?,
-                    incidence: Incidence::degrees(0.0)?,
-                    coherence: Coherence::Coherent,
-                },
-                ..stimuli[0].clone()
-            }];
-            let reference = Reference::new(&truth, Observer::Cie1931, 380.0, 780.0)?;
-            for &step in steps {
+            let name = format!("{d} nm film ({label})");
+            let stimuli = [Stimulus::new(name, d65.data.clone(), film(d, coherence)?)];
+            for &step in steps(quick) {
                 let grid = WavelengthGrid::new(380.0, 780.0, step)?;
+                let case = format!("{d} nm film, {label}");
                 let mut row = grid_row(
                     "film",
-                    &format!("{d} nm film, {label}"),
+                    &case,
                     &reference,
                     &stimuli,
                     &grid,
                     Rule::Riemann,
-                    min_s,
+                    min_seconds(quick),
                 );
                 row.note = format!(
                     "fringe period at 550 nm about {:.1} nm",
@@ -166,16 +301,20 @@ pub fn run(a: BenchArgs) -> anyhow::Result<()> {
             }
         }
     }
+    Ok(rows)
+}
 
-    // 3. Upsampling modes: the round trip RGB -> SPD -> RGB over an RGB cube.
+/// Section 3, upsampling modes: the round trip RGB -> SPD -> RGB over an RGB cube.
+fn mode_rows(quick: bool) -> anyhow::Result<Vec<Row>> {
     let n = if quick { 9 } else { 17 };
     let grid = WavelengthGrid::new(380.0, 780.0, 5.0)?;
-    let mode_lights: &[&str] = if quick {
+    let lights: &[&str] = if quick {
         &["D65", "FL2"]
     } else {
         &["D65", "A", "FL2", "FL11"]
     };
-    for &name in mode_lights {
+    let mut rows = Vec::new();
+    for &name in lights {
         eprintln!("bench: modes, {name}");
         let input = FitInput::from_names(
             name,
@@ -199,6 +338,8 @@ pub fn run(a: BenchArgs) -> anyhow::Result<()> {
                 time_unit: "us per colour",
                 mean: Some(rt.mean_de2000),
                 max: Some(rt.max_de2000),
+                gpu_ms: None,
+                estimate: None,
                 note: format!(
                     "{} colours of a {n}^3 sRGB cube; {:.1}% of SPDs go negative",
                     rt.colours,
@@ -207,8 +348,15 @@ pub fn run(a: BenchArgs) -> anyhow::Result<()> {
             });
         }
     }
+    Ok(rows)
+}
 
-    // 4. Render sample counts: the ball preset against its 1 nm render.
+/// Section 4, render sample counts: the ball preset against its 1 nm render, on each backend.
+fn render_reports(
+    quick: bool,
+    gpu: Option<&Gpu>,
+    cpu: bool,
+) -> anyhow::Result<Vec<sweep::SweepReport>> {
     eprintln!("bench: render sample counts");
     let (w, h) = if quick { (32, 32) } else { (64, 64) };
     let counts: &[usize] = if quick {
@@ -218,31 +366,19 @@ pub fn run(a: BenchArgs) -> anyhow::Result<()> {
     };
     let scene = Preset::Ball.scene(w, h, "D65", None)?;
     let spectral = Spectral::default();
-    let gpu = match a.backend {
-        BackendArg::Cpu => None,
-        BackendArg::Gpu => Some(Gpu::new().context("--backend gpu")?),
-        BackendArg::Auto => Gpu::new()
-            .map_err(|e| {
-                eprintln!(
-                    "note: no GPU adapter, the render rows use the CPU renderer: {}",
-                    e.to_string().lines().next().unwrap_or_default()
-                )
-            })
-            .ok(),
-    };
     let repeats = if quick { 1 } else { 3 };
     let mut reports = Vec::new();
-    if gpu.is_some() {
+    if let Some(g) = gpu {
         reports.push(sweep::sweep(
             &scene,
             &spectral,
             counts,
             Backend::Gpu,
-            gpu.as_ref(),
+            Some(g),
             repeats,
         )?);
     }
-    if a.backend != BackendArg::Gpu {
+    if cpu {
         reports.push(sweep::sweep(
             &scene,
             &spectral,
@@ -252,7 +388,12 @@ pub fn run(a: BenchArgs) -> anyhow::Result<()> {
             repeats,
         )?);
     }
-    for r in &reports {
+    Ok(reports)
+}
+
+fn render_rows(reports: &[sweep::SweepReport]) -> Vec<Row> {
+    let mut rows = Vec::new();
+    for r in reports {
         let case = match &r.adapter {
             Some(adapter) => format!("ball {}x{}, GPU ({adapter})", r.width, r.height),
             None => format!(
@@ -272,6 +413,8 @@ pub fn run(a: BenchArgs) -> anyhow::Result<()> {
                 time_unit: "ms per frame",
                 mean: Some(row.mean_de2000),
                 max: Some(row.max_de2000),
+                gpu_ms: None,
+                estimate: None,
                 note: format!(
                     "step {:.2} nm; 1 nm frame {:.1} ms",
                     row.step_nm, r.reference_frame_ms
@@ -279,37 +422,7 @@ pub fn run(a: BenchArgs) -> anyhow::Result<()> {
             });
         }
     }
-
-    let seconds = t0.elapsed().as_secs_f64();
-    let table = markdown(&rows, seconds, quick);
-    let doc = serde_json::json!({
-        "quick": quick,
-        "seconds": seconds,
-        "threads": rayon::current_num_threads(),
-        "reference": "380..780 nm at 1 nm, Simpson's rule (render: the 1 nm render)",
-        "rows": rows,
-    });
-    if let Some(dir) = &a.report {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-        specmap::io::write_atomic(&dir.join("bench.md"), table.as_bytes())?;
-        specmap::io::write_atomic(
-            &dir.join("bench.json"),
-            (serde_json::to_string_pretty(&doc)? + "\n").as_bytes(),
-        )?;
-        plot::write(&error_count_figure(&rows, "grid"), &dir.join("grid.png"))?;
-        plot::write(&film_figure(&rows), &dir.join("film.png"))?;
-        sweep::plot(&reports, &dir.join("render.png")).context("writing the render plot")?;
-        eprintln!(
-            "wrote {0}/bench.md, bench.json, grid.png, film.png, render.png",
-            dir.display()
-        );
-    }
-    if a.json {
-        super::emit(&(serde_json::to_string_pretty(&doc)? + "\n"));
-    } else {
-        super::emit(&table);
-    }
-    Ok(())
+    rows
 }
 
 fn soap_film(thickness_nm: f64) -> anyhow::Result<Stack> {
@@ -345,6 +458,8 @@ fn grid_row(
             time_unit: "us per colour",
             mean: Some(m.mean_de2000),
             max: Some(m.max_de2000),
+            gpu_ms: None,
+            estimate: None,
             note: format!("worst: {}", m.worst),
         },
         Err(e) => Row {
@@ -356,8 +471,27 @@ fn grid_row(
             time_unit: "us per colour",
             mean: None,
             max: None,
+            gpu_ms: None,
+            estimate: None,
             note: format!("unusable: {e}"),
         },
+    }
+}
+
+/// A duration for the report: `450 ms`, `8.3 s`, `95 s`, `12 min 5 s` (a quick run of less
+/// than half a second is not "0 s").
+fn duration(seconds: f64) -> String {
+    if !seconds.is_finite() || seconds < 0.0 {
+        "-".into()
+    } else if seconds < 1.0 {
+        format!("{:.0} ms", seconds * 1e3)
+    } else if seconds < 10.0 {
+        format!("{seconds:.1} s")
+    } else if seconds < 120.0 {
+        format!("{seconds:.0} s")
+    } else {
+        let s = seconds.round() as u64;
+        format!("{} min {} s", s / 60, s % 60)
     }
 }
 
@@ -366,9 +500,10 @@ fn markdown(rows: &[Row], seconds: f64, quick: bool) -> String {
     super::outln!(
         out,
         "# specmap bench{}\n\nColour error (CIEDE2000) against 380..780 nm at 1 nm by Simpson's rule \
-         (render rows: against the 1 nm render), and time, on {} threads; {seconds:.0} s in all.\n",
+         (render and quadrature rows: against the 1 nm render), and time, on {} threads; {} in all.\n",
         if quick { " --quick" } else { "" },
-        rayon::current_num_threads()
+        rayon::current_num_threads(),
+        duration(seconds)
     );
     for (section, title) in [
         ("grid", "Wavelength step and integration rule (a light and the 24 ColorChecker patches under it)"),
@@ -401,6 +536,16 @@ fn markdown(rows: &[Row], seconds: f64, quick: bool) -> String {
                 r.note
             );
         }
+        out.push('\n');
+    }
+    if rows.iter().any(|r| r.section == "quadrature") {
+        super::outln!(
+            out,
+            "## Quadratures: uniform (coarsest step at its best rule), Meyer's four wavelengths and \
+             the scene's, as `render --tolerance` chooses them\n\nImage error on the CPU against \
+             its 1 nm render; frame times are the fastest of the repeats (GPU: compute only).\n"
+        );
+        out.push_str(&quadrature::markdown(rows));
         out.push('\n');
     }
     out
@@ -448,7 +593,8 @@ fn error_count_figure(rows: &[Row], section: &str) -> Figure {
     }
 }
 
-/// Film error against step, one curve per thickness and coherence.
+/// Film error against step, one curve per thickness and coherence; a thickness whose automatic
+/// coherence gives the coherent curve exactly is one curve (two would hide one another).
 fn film_figure(rows: &[Row]) -> Figure {
     let series = cases(rows, "film")
         .iter()
@@ -470,6 +616,87 @@ fn film_figure(rows: &[Row]) -> Figure {
         title: "Thin films: colour error against wavelength step".into(),
         x_label: "wavelength step (nm)".into(),
         y_label: "log10 CIEDE2000 vs 1 nm Simpson (coherent)".into(),
-        series,
+        series: merge_identical(series),
+    }
+}
+
+/// Curves with the same points become one, labelled `A, x = y` from `A, x` and `A, y`.
+fn merge_identical(series: Vec<Series>) -> Vec<Series> {
+    let mut out: Vec<Series> = Vec::new();
+    for s in series {
+        let same = |o: &Series| {
+            o.points.len() == s.points.len()
+                && o.points
+                    .iter()
+                    .zip(&s.points)
+                    .all(|(a, b)| a.0 == b.0 && (a.1 - b.1).abs() <= 1e-9)
+        };
+        match out.iter_mut().find(|o| same(o)) {
+            Some(o) => {
+                let tail = match (o.label.rsplit_once(", "), s.label.rsplit_once(", ")) {
+                    (Some((a, _)), Some((b, t))) if a == b => t.to_string(),
+                    _ => s.label.clone(),
+                };
+                o.label = format!("{} = {tail}", o.label);
+            }
+            None => out.push(s),
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn film_row(case: &str, step: f64, max: f64) -> Row {
+        Row {
+            section: "film",
+            case: case.into(),
+            setting: format!("{step} nm, riemann"),
+            samples: None,
+            time: 1.0,
+            time_unit: "us per colour",
+            mean: Some(max),
+            max: Some(max),
+            gpu_ms: None,
+            estimate: None,
+            note: String::new(),
+        }
+    }
+
+    #[test]
+    fn a_short_run_is_not_reported_as_zero_seconds() {
+        assert_eq!(duration(0.45), "450 ms");
+        assert_eq!(duration(8.26), "8.3 s");
+        assert_eq!(duration(95.0), "95 s");
+        assert_eq!(duration(725.0), "12 min 5 s");
+        let header = markdown(&[], 0.45, true);
+        assert!(
+            header.contains("450 ms in all") && !header.contains(" 0 s"),
+            "{header}"
+        );
+    }
+
+    #[test]
+    fn coinciding_film_curves_are_drawn_once() {
+        // A thin film is coherent at every step under the automatic rule: same curve.
+        let mut rows = Vec::new();
+        for (step, e) in [(1.0, 1e-4), (5.0, 1e-2), (20.0, 0.3)] {
+            rows.push(film_row("100 nm film, coherent", step, e));
+            rows.push(film_row("100 nm film, auto", step, e));
+            rows.push(film_row("10000 nm film, coherent", step, 10.0 * e));
+            rows.push(film_row("10000 nm film, auto", step, 2.0 * e));
+        }
+        let fig = film_figure(&rows);
+        let labels: Vec<&str> = fig.series.iter().map(|s| s.label.as_str()).collect();
+        assert_eq!(
+            labels,
+            [
+                "100 nm film, coherent = auto",
+                "10000 nm film, coherent",
+                "10000 nm film, auto"
+            ]
+        );
     }
 }

@@ -1,12 +1,17 @@
 //! `specmap color`: the colour of a light, or of a reflectance under a light.
 
 use super::outln;
+use super::render::QuadratureArg;
 use super::SpaceArg;
 use clap::Args;
 use specmap::colorimetry::{cct, srgb8, Cmfs, Lab, Observer, RgbSpace, Xyz, D65_XY};
 use specmap::data;
+use specmap::quadrature::choose::{self, Family, Selection};
+use specmap::quadrature::estimate::White;
+use specmap::quadrature::fit::Options;
+use specmap::quadrature::Quadrature;
 use specmap::spectrum::{Interpolation, Rule};
-use specmap::tradeoff::{choose_grid, Stimulus, Surface};
+use specmap::tradeoff::{choose_grid, GridChoice, Stimulus, Surface};
 
 #[derive(Debug, Args)]
 #[command(after_help = "\
@@ -28,10 +33,16 @@ pub struct ColorArgs {
     /// RGB space for `linear_rgb` (linear_srgb and srgb8 are always sRGB).
     #[arg(long, value_enum, default_value_t = SpaceArg::Srgb)]
     space: SpaceArg,
-    /// Choose the coarsest wavelength step (within --range) whose colour stays within this
-    /// CIEDE2000 of a 1 nm Simpson reference, and report it.
+    /// Choose the cheapest quadrature (within --range) whose colours stay within this CIEDE2000
+    /// of a 1 nm Simpson reference: for the colour asked for and, so that the wavelengths hold
+    /// for its light, the ColorChecker under that light (see --quadrature); and report it.
     #[arg(long, value_name = "DE")]
     tolerance: Option<f64>,
+    /// `scene` (the default with --tolerance) fits nodes and weights to the light and the
+    /// colours under it; `uniform` is --range and --rule (with --tolerance: the coarsest step
+    /// of the colour alone); `meyer` is Meyer's four-wavelength Gaussian quadrature.
+    #[arg(long, value_enum, value_name = "KIND")]
+    quadrature: Option<QuadratureArg>,
     /// Machine-readable output.
     #[arg(long)]
     json: bool,
@@ -40,44 +51,25 @@ pub struct ColorArgs {
 pub fn run(a: ColorArgs) -> anyhow::Result<()> {
     let observer = Observer::from(a.spectral.observer);
     let rule = Rule::from(a.spectral.rule);
-    let mut range = a.spectral.range;
     let space = RgbSpace::from(a.space);
     let spd = data::spectrum(&a.spd)?;
-    let choice = match a.tolerance {
-        None => None,
-        Some(tolerance) => {
-            let stimulus = match &a.under {
-                Some(light) => {
-                    let light = data::spectrum(light)?;
-                    Stimulus {
-                        name: format!("{} under {}", spd.label, light.label),
-                        light: light.data,
-                        surface: Surface::Reflectance(spd.data.clone()),
-                    }
-                }
-                None => Stimulus::emitter(spd.label.clone(), spd.data.clone()),
-            };
-            let (start, end) = (range.start_nm(), range.end_nm());
-            let c = choose_grid(&[stimulus], observer, start, end, rule, tolerance)?;
-            range = c.chosen;
-            Some(c)
-        }
+    let under = a.under.as_deref().map(data::spectrum).transpose()?;
+    let stimulus = match &under {
+        Some(light) => Stimulus::new(
+            format!("{} under {}", spd.label, light.label),
+            light.data.clone(),
+            Surface::Reflectance(spd.data.clone()),
+        ),
+        None => Stimulus::emitter(spd.label.clone(), spd.data.clone()),
     };
-    let cmfs = Cmfs::new(observer, &range)?;
-    let (xyz, white, under_label) = match &a.under {
-        Some(light) => {
-            let light = data::spectrum(light)?;
-            let s = light.data.resample(&range, Interpolation::LIGHT);
-            let r = spd.data.resample(&range, Interpolation::SMOOTH);
-            let xyz = cmfs.reflectance_xyz(&r, &s, rule)?;
-            let white = cmfs.light_xyz(&s, rule)?;
-            (xyz, white, Some(light.label))
-        }
-        None => {
-            let s = spd.data.resample(&range, Interpolation::LIGHT);
-            (cmfs.light_xyz(&s, rule)?, Xyz::from_xy(D65_XY), None)
-        }
-    };
+    let light_label = under
+        .as_ref()
+        .map_or(spd.label.clone(), |l| l.label.clone());
+    let (quadrature, grid_choice, selection) =
+        quadrature_for(&a, &stimulus, &light_label, observer, rule)?;
+    let uniform = quadrature.uniform_grid();
+    let (xyz, white) = colour(&stimulus, &quadrature, under.is_some(), &light_label)?;
+    let under_label = under.map(|l| l.label);
     let xy = xyz.xy();
     let temperature = cct(xyz)?;
     let linear_srgb = RgbSpace::SRGB.rgb_from_xyz(xyz);
@@ -106,8 +98,11 @@ pub fn run(a: ColorArgs) -> anyhow::Result<()> {
             "spd": spd.label,
             "under": under_label,
             "observer": observer,
-            "range": range.to_string(),
-            "rule": rule,
+            "range": uniform.map(|(g, _)| g.to_string()),
+            "rule": uniform.map(|(_, r)| r),
+            "wavelengths": quadrature.len(),
+            "quadrature": quadrature.summary(selection.as_ref().map(|s| s.estimate_de2000)),
+            "quadrature_choice": selection,
             "XYZ": xyz.0,
             "xy": xy,
             "cct_K": temperature.kelvin,
@@ -119,7 +114,7 @@ pub fn run(a: ColorArgs) -> anyhow::Result<()> {
             "linear_rgb": linear_rgb,
             "lab": lab.0,
             "lab_note": lab_note,
-            "grid_choice": choice,
+            "grid_choice": grid_choice,
             "lab_white": if under_label.is_some() { "the light (perfect reflector = L* 100)" } else { "D65, Y = 100" },
         });
         super::emit(&(serde_json::to_string_pretty(&doc)? + "\n"));
@@ -130,9 +125,15 @@ pub fn run(a: ColorArgs) -> anyhow::Result<()> {
         None => format!("{} (as a light, Y = 100)", spd.label),
     };
     let mut out = String::new();
-    outln!(out, "{what}\n  {observer}, {} nm, {rule} rule", range);
-    if let Some(c) = &choice {
+    match uniform {
+        Some((grid, rule)) => outln!(out, "{what}\n  {observer}, {grid} nm, {rule} rule"),
+        None => outln!(out, "{what}\n  {observer}, {quadrature}"),
+    }
+    if let Some(c) = &grid_choice {
         super::write_grid_choice(&mut out, c);
+    }
+    if let Some(s) = &selection {
+        super::render::write_selection(&mut out, s);
     }
     super::write_xyz(&mut out, xyz);
     match temperature.kelvin {
@@ -189,4 +190,85 @@ pub fn run(a: ColorArgs) -> anyhow::Result<()> {
     }
     super::emit(&out);
     Ok(())
+}
+
+/// The quadrature of `--quadrature`, `--tolerance`, `--range` and `--rule`, and what
+/// `--tolerance` chose (a uniform grid's choice, or the scene fit's selection).
+fn quadrature_for(
+    a: &ColorArgs,
+    stimulus: &Stimulus,
+    light_label: &str,
+    observer: Observer,
+    rule: Rule,
+) -> anyhow::Result<(Quadrature, Option<GridChoice>, Option<Selection>)> {
+    let range = a.spectral.range;
+    let (start, end) = (range.start_nm(), range.end_nm());
+    Ok(match (a.tolerance, a.quadrature) {
+        (None, Some(QuadratureArg::Scene)) => anyhow::bail!(
+            "--quadrature scene fits the wavelengths to a colour tolerance: give --tolerance \
+             (e.g. --tolerance 0.5)"
+        ),
+        (Some(_), Some(QuadratureArg::Meyer)) => anyhow::bail!(
+            "--quadrature meyer has four fixed wavelengths: it cannot follow --tolerance"
+        ),
+        (None, Some(QuadratureArg::Meyer)) => (Quadrature::meyer(observer)?, None, None),
+        (None, _) => (Quadrature::uniform(range, rule, observer)?, None, None),
+        (Some(tolerance), Some(QuadratureArg::Uniform)) => {
+            let one = std::slice::from_ref(stimulus);
+            let c = choose_grid(one, observer, start, end, rule, tolerance)?;
+            (
+                Quadrature::uniform(c.chosen, rule, observer)?,
+                Some(c),
+                None,
+            )
+        }
+        (Some(tolerance), _) => {
+            let (fit, held_out) = choose::for_colour(stimulus.clone(), light_label)?;
+            let scene = choose::Scene {
+                fit: &fit,
+                held_out: &held_out,
+                observer,
+                start_nm: start,
+                end_nm: end,
+                white: White::OwnLight,
+            };
+            let s = choose::select(&scene, Family::Scene, &Options::new(tolerance)?)?;
+            (s.quadrature.clone(), None, Some(s))
+        }
+    })
+}
+
+/// XYZ of the stimulus on the quadrature (Eq. 10/11: a white under the light is Y = 100) and
+/// its CIELAB white: the light for a reflectance, D65 for a light.
+fn colour(
+    stimulus: &Stimulus,
+    q: &Quadrature,
+    reflectance: bool,
+    light_label: &str,
+) -> anyhow::Result<(Xyz, Xyz)> {
+    if let Some((grid, rule)) = q.uniform_grid() {
+        let cmfs = Cmfs::new(q.observer(), &grid)?;
+        let s = stimulus.light.resample(&grid, Interpolation::LIGHT);
+        return Ok(match &stimulus.surface {
+            Surface::Reflectance(r) if reflectance => {
+                let r = r.resample(&grid, Interpolation::SMOOTH);
+                (
+                    cmfs.reflectance_xyz(&r, &s, rule)?,
+                    cmfs.light_xyz(&s, rule)?,
+                )
+            }
+            _ => (cmfs.light_xyz(&s, rule)?, Xyz::from_xy(D65_XY)),
+        });
+    }
+    let (light, value) = stimulus.values_at(q.nodes_nm())?;
+    let rel = |v: &[f64]| {
+        q.relative_xyz(v, &light).ok_or_else(|| {
+            anyhow::anyhow!("{light_label}: no visible energy at the wavelengths {q}")
+        })
+    };
+    Ok(if reflectance {
+        (rel(&value)?, rel(&light)?)
+    } else {
+        (rel(&light)?, Xyz::from_xy(D65_XY))
+    })
 }

@@ -6,9 +6,12 @@ use super::{ObserverArg, RuleArg};
 use anyhow::Context;
 use clap::{Args, ValueEnum};
 use specmap::colorimetry::RgbSpace;
+use specmap::quadrature::choose::{Family, Selection};
+use specmap::quadrature::fit::Options;
+use specmap::quadrature::Quadrature;
 use specmap::render::gpu::Gpu;
 use specmap::render::prepare::Prepared;
-use specmap::render::{cpu, env, sweep, Backend, Film, Preset, Spectral};
+use specmap::render::{cpu, env, sweep, Backend, Film, Preset, Scene, Spectral};
 use specmap::spectrum::Tabulated;
 use specmap::thinfilm::{Index, Layer, Material};
 use std::path::PathBuf;
@@ -24,6 +27,8 @@ Examples:
   specmap render --scene ball -o ball.png
   specmap render --scene ball --env envmaps/sunrise.exr --samples 81 -o ball.exr
   specmap render --scene cylinders --backend cpu --step 5 --json
+  specmap render --scene cylinders --tolerance 0.5 --json   # the fewest wavelengths for CIEDE2000 0.5
+  specmap render --scene ball --light FL2 --quadrature meyer -o meyer.png
   specmap render --scene chart --size 768x512 --exposure -0.5 -o chart.png
   specmap render --scene ball --film 1.38:100,2.1:130 --substrate bk7 -o coated.png
   specmap render --scene chart --size 384x256 --sweep 4,9,17,34,81,340 --sweep-out sweep/")]
@@ -65,10 +70,16 @@ pub struct RenderArgs {
     /// Number of wavelengths over 380..780 nm (default 81: 5 nm).
     #[arg(long, value_name = "N")]
     samples: Option<usize>,
-    /// Choose the coarsest step over 380..780 nm that keeps the scene's lights, pigments and
-    /// films within this CIEDE2000 of a 1 nm reference, and report it.
+    /// Choose the cheapest quadrature (fewest wavelengths) that keeps every spectrum the scene
+    /// can produce (its lights, pigments and films over their angles and thicknesses) within
+    /// this CIEDE2000 of the 1 nm render, and report it.
     #[arg(long, value_name = "DE", conflicts_with_all = ["step", "samples"])]
     tolerance: Option<f64>,
+    /// Which wavelengths and weights: `scene` fits them to the scene (needs --tolerance, and is
+    /// its default), `uniform` is the --step/--samples grid (or, with --tolerance, the coarsest
+    /// step at its best rule), `meyer` is Meyer's four-wavelength Gaussian quadrature.
+    #[arg(long, value_enum, value_name = "KIND", conflicts_with = "sweep")]
+    quadrature: Option<QuadratureArg>,
     /// Integration rule of the colour integrals.
     #[arg(long, value_enum, default_value_t = RuleArg::Riemann)]
     rule: RuleArg,
@@ -124,6 +135,17 @@ impl From<SceneArg> for Preset {
             SceneArg::Chart => Preset::Chart,
         }
     }
+}
+
+/// `--quadrature`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub(crate) enum QuadratureArg {
+    /// fitted to the scene's spectra (with --tolerance)
+    Scene,
+    /// a uniform grid and integration rule
+    Uniform,
+    /// Meyer's (1988) four-wavelength Gaussian quadrature
+    Meyer,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -280,28 +302,13 @@ pub fn run(a: RenderArgs) -> anyhow::Result<()> {
         (None, Some(n)) => Spectral::samples(n)?,
         (None, None) => Spectral::default(),
     };
-    let mut spectral = Spectral {
+    let spectral = Spectral {
         rule: a.rule.into(),
         observer: a.observer.into(),
         space: RgbSpace::SRGB,
         ..base
     };
-    let grid_choice = match a.tolerance {
-        None => None,
-        Some(tolerance) => {
-            let c = specmap::tradeoff::choose_grid(
-                &scene.stimuli()?,
-                spectral.observer,
-                380.0,
-                780.0,
-                spectral.rule,
-                tolerance,
-            )?;
-            spectral.grid = c.chosen;
-            Some(c)
-        }
-    };
-
+    let (quadrature, selection) = quadrature_for(&scene, &spectral, a.quadrature, a.tolerance)?;
     // The backend.
     let gpu = match a.backend {
         BackendArg::Cpu => None,
@@ -375,7 +382,7 @@ pub fn run(a: RenderArgs) -> anyhow::Result<()> {
     }
 
     let t0 = Instant::now();
-    let prepared = Prepared::new(&scene, &spectral)?;
+    let prepared = Prepared::with_quadrature(&scene, &quadrature, spectral.space)?;
     let prepare_s = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
     let (image, gpu_timing) = match &gpu {
@@ -391,15 +398,17 @@ pub fn run(a: RenderArgs) -> anyhow::Result<()> {
         .with_context(|| format!("writing {}", output.display()))?;
 
     if a.json {
+        let uniform = quadrature.uniform_grid();
         let doc = serde_json::json!({
             "scene": preset.name(),
             "size": [w, h],
             "backend": backend,
             "adapter": adapter,
-            "wavelengths": spectral.grid.len(),
-            "range": spectral.grid.to_string(),
-            "rule": spectral.rule,
-            "grid_choice": grid_choice,
+            "wavelengths": quadrature.len(),
+            "range": uniform.map(|(g, _)| g.to_string()),
+            "rule": uniform.map(|(_, r)| r),
+            "quadrature": quadrature.summary(selection.as_ref().map(|s| s.estimate_de2000)),
+            "quadrature_choice": selection,
             "light": scene.lightings.iter().map(|l| l.label.clone()).collect::<Vec<_>>(),
             "env": env_report,
             "prepare_s": prepare_s,
@@ -414,18 +423,17 @@ pub fn run(a: RenderArgs) -> anyhow::Result<()> {
     let mut out = String::new();
     outln!(
         out,
-        "rendered {} {w}x{h}, {} wavelengths ({} nm, {} rule) on the {backend}{}",
+        "rendered {} {w}x{h}, {} wavelengths ({}) on the {backend}{}",
         preset.name(),
-        spectral.grid.len(),
-        spectral.grid,
-        spectral.rule,
+        quadrature.len(),
+        quadrature,
         adapter
             .as_ref()
             .map(|a| format!(" ({}, {})", a.name, a.backend))
             .unwrap_or_default()
     );
-    if let Some(c) = &grid_choice {
-        super::write_grid_choice(&mut out, c);
+    if let Some(c) = &selection {
+        write_selection(&mut out, c);
     }
     if let Some(r) = &env_report {
         outln!(
@@ -455,4 +463,73 @@ pub fn run(a: RenderArgs) -> anyhow::Result<()> {
     outln!(out, "wrote {}", output.display());
     super::emit(&out);
     Ok(())
+}
+
+/// The quadrature of `--quadrature`, `--tolerance`, `--step`/`--samples` and `--rule`, and what
+/// `--tolerance` chose.
+fn quadrature_for(
+    scene: &Scene,
+    spectral: &Spectral,
+    kind: Option<QuadratureArg>,
+    tolerance: Option<f64>,
+) -> anyhow::Result<(Quadrature, Option<Selection>)> {
+    let uniform = || Quadrature::uniform(spectral.grid, spectral.rule, spectral.observer);
+    let Some(tolerance) = tolerance else {
+        return Ok(match kind {
+            Some(QuadratureArg::Scene) => anyhow::bail!(
+                "--quadrature scene fits the wavelengths to a colour tolerance: give --tolerance \
+                 (e.g. --tolerance 0.5)"
+            ),
+            Some(QuadratureArg::Meyer) => (Quadrature::meyer(spectral.observer)?, None),
+            Some(QuadratureArg::Uniform) | None => (uniform()?, None),
+        });
+    };
+    let opts = Options::new(tolerance)?;
+    let family = match kind {
+        Some(QuadratureArg::Uniform) => Family::Uniform,
+        Some(QuadratureArg::Meyer) => anyhow::bail!(
+            "--quadrature meyer has four fixed wavelengths: it cannot follow --tolerance"
+        ),
+        Some(QuadratureArg::Scene) | None => Family::Scene,
+    };
+    let s = scene.choose_quadrature(spectral.observer, spectral.space, family, &opts)?;
+    Ok((s.quadrature.clone(), Some(s)))
+}
+
+/// Appends what `--tolerance` chose, and why.
+pub(crate) fn write_selection(out: &mut String, s: &Selection) {
+    outln!(
+        out,
+        "  quadrature   {}: estimate {:.3} {} target {:.3} (tolerance {} x margin {:.2}); {}",
+        s.kind,
+        s.estimate_de2000,
+        if s.met { "<=" } else { "MISSES the" },
+        s.target_de2000,
+        s.tolerance_de2000,
+        s.target_de2000 / s.tolerance_de2000,
+        s.reason
+    );
+    if let Some(f) = &s.scene {
+        outln!(
+            out,
+            "               scene fit: {} stimuli fitted, {} held out (max {:.3}, mean {:.3}); \
+             nodes on lines at {:?} nm; largest error: {}",
+            f.stimuli,
+            f.held_out,
+            f.held_out_max,
+            f.held_out_mean,
+            f.lines_nm,
+            f.worst
+        );
+    }
+    let u = &s.uniform;
+    outln!(
+        out,
+        "               uniform: {} {} ({} wavelengths), estimate {:.3}{}",
+        u.grid,
+        u.rule,
+        u.samples,
+        u.estimate_de2000,
+        if u.met { "" } else { " (misses the target)" }
+    );
 }

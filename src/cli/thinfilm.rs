@@ -39,7 +39,8 @@ pub struct ThinfilmArgs {
     /// Polarisation of the incident light.
     #[arg(long, value_enum, default_value_t = PolArg::Unpolarized)]
     pol: PolArg,
-    /// Layers whose fringes are finer than the step: computed incoherently (auto) or not.
+    /// Layers whose fringes get fewer than two samples (Nyquist): computed incoherently (auto)
+    /// or not.
     #[arg(long, value_enum, default_value_t = CoherenceArg::Auto)]
     coherence: CoherenceArg,
     /// Light under which the reflected colour is computed.
@@ -77,7 +78,7 @@ impl From<PolArg> for Polarization {
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
 enum CoherenceArg {
-    /// incoherent where a layer's fringe period is finer than the wavelength step
+    /// incoherent where a layer's fringe period is below two wavelength steps
     Auto,
     /// every layer coherent (thick layers alias)
     Coherent,
@@ -267,7 +268,8 @@ pub fn run(a: ThinfilmArgs) -> anyhow::Result<()> {
     if !incoherent.is_empty() {
         outln!(
             out,
-            "  layer(s) {:?} computed incoherently: their fringes are finer than the {} nm step",
+            "  layer(s) {:?} computed incoherently: their fringes get fewer than two samples \
+             at the {} nm step",
             incoherent,
             grid.step_nm()
         );

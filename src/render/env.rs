@@ -546,8 +546,8 @@ fn load_spectral(path: &Path, light: &str) -> Result<(Lighting, EnvReport)> {
         ))
     })?;
     let probe = lighting(&light, names, CoeffMap::constant([0.0; 4]), None)?;
-    let spectra =
-        super::prepare::lighting_spectra(&probe, &grid, Rule::Riemann, Observer::Cie1931)?;
+    let q = crate::quadrature::Quadrature::uniform(grid, Rule::Riemann, Observer::Cie1931)?;
+    let spectra = super::prepare::lighting_spectra(&probe, &q)?;
     // Normal equations of the 4-function least squares.
     let n = wl.len();
     let g = nalgebra::Matrix4::from_fn(|a, b| (0..n).map(|i| spectra[a][i] * spectra[b][i]).sum());

@@ -8,6 +8,8 @@ struct Params {
     n_wl: u32,
     n_objects: u32,
     background: u32,
+    // The quadrature: n_wl nodes (wavelengths at wl_offset) and their x, y, z weights over
+    // sum w_y (at cmf_offset, n_wl each), so that XYZ = sum_i w_i I(lambda_i).
     cmf_offset: u32,
     wl_offset: u32,
     pad: u32,

@@ -10,7 +10,7 @@
 //! - the environment is linear in four coefficients per direction (GUIDE.md):
 //!   `L(w, lambda) = sum_j c_j(w) B_j(lambda) + c_3(w) E(lambda)`, `B_j` the fitted basis spectra
 //!   of the main light, `E` the sun's (or, for a uniform light, the main light's) SPD, all scaled
-//!   to luminance Y = 1 on the render grid. Lighting integrals are taken in coefficient space on
+//!   to luminance Y = 1 on the render's wavelengths. Lighting integrals are taken in coefficient space on
 //!   the CPU ([`env`]): a diffuse irradiance map `D(N) = 1/pi int L max(N.w, 0) dw` and, per
 //!   shininess `n`, a specular map `P_n(R) = int L (R.w)^n dw / int (R.w)^n dw`, both lat-long;
 //!   the renderers expand the sampled coefficients with the spectra per wavelength;
@@ -24,8 +24,10 @@
 //!   without a film `k_s' = k_s`, `T_f = 1`;
 //! - a transparent surface (Eq. 9) is thin-walled: `I = R_f [P_n(R_v) + sun lobe] + T_f L(d)`,
 //!   `L(d)` the environment behind, along the view ray `d`;
-//! - `XYZ = sum_i w_i I(lambda_i) cmf(lambda_i) / sum_i w_i ybar(lambda_i)` by the chosen
-//!   integration rule (Eq. 10/11: a perfect white under the main light has Y = 1), then linear
+//! - `XYZ = sum_i W_i I(lambda_i) / sum_i W_y,i` over the nodes `lambda_i` of a quadrature
+//!   ([`crate::quadrature`]) with a weight triple `W_i` per node: for a uniform grid
+//!   `W_i = w_i cmf(lambda_i)` by the chosen integration rule, for a scene's quadrature the
+//!   fitted weights (Eq. 10/11: a perfect white under the main light has Y = 1); then linear
 //!   RGB by the output space's matrix. No white balance: a scene under illuminant A looks warm.
 //!
 //! Both backends consume the same [`prepare::Prepared`] data (f32 spectra, maps and objects); the
@@ -37,6 +39,7 @@ pub mod gpu;
 pub mod image;
 pub mod prepare;
 pub mod presets;
+pub mod stimuli;
 pub mod sweep;
 
 pub use self::image::{compare, Comparison, Image};
@@ -169,7 +172,7 @@ pub struct Lighting {
     /// The basis reflectances (the paper's ColorChecker red, green, blue).
     pub basis_reflectance: [Tabulated; 3],
     /// `E`, the SPD of the fourth coefficient: the sun's for a map, the main light's for a uniform
-    /// or sky-and-ground environment. On the render grid `B_j = MCC_j * light * k` with `k`
+    /// or sky-and-ground environment. At the render's wavelengths `B_j = MCC_j * light * k` with `k`
     /// making the light Y = 1, and `E` is scaled to Y = 1 (as
     /// [`crate::envmap::engine::Engine`] does).
     pub e_spd: Tabulated,
@@ -277,64 +280,6 @@ impl std::fmt::Display for Backend {
 }
 
 impl Scene {
-    /// What the scene shows, as stimuli for [`crate::tradeoff::choose_grid`] (`--tolerance`):
-    /// every light of every lighting (the main light and `E`) seen directly, and under each the
-    /// pigments and films of the objects it lights; films at 0 and 60 degrees, at both ends and
-    /// the middle of a thickness ramp, coherent as the renderer computes them.
-    pub fn stimuli(&self) -> Result<Vec<crate::tradeoff::Stimulus>> {
-        use crate::thinfilm::{Coherence, Incidence, Stack};
-        use crate::tradeoff::{Stimulus, Surface as Seen};
-        let mut out = Vec::new();
-        for (i, lighting) in self.lightings.iter().enumerate() {
-            let mut lights = vec![(lighting.label.clone(), lighting.light.clone())];
-            if lighting.e_label != lighting.label {
-                lights.push((lighting.e_label.clone(), lighting.e_spd.clone()));
-            }
-            for (label, spd) in lights {
-                out.push(Stimulus::emitter(label.clone(), spd.clone()));
-                for o in self.objects.iter().filter(|o| o.lighting == i) {
-                    let s = &o.surface;
-                    if let Some(r) = &s.diffuse {
-                        out.push(Stimulus {
-                            name: format!("{} under {label}", s.label),
-                            light: spd.clone(),
-                            surface: Seen::Reflectance(r.clone()),
-                        });
-                    }
-                    let Some(film) = &s.film else { continue };
-                    let scales: Vec<f64> = match o.ramp {
-                        Some(r) => vec![r.s0, 0.5 * (r.s0 + r.s1), r.s1],
-                        None => vec![1.0],
-                    };
-                    for k in scales {
-                        let layers = film
-                            .layers
-                            .iter()
-                            .map(|l| Layer::new(l.material().clone(), l.thickness_nm() * k))
-                            .collect::<Result<Vec<_>>>()?;
-                        let stack =
-                            Stack::new(film.ambient.clone(), layers, film.substrate.clone());
-                        for degrees in [0.0, 60.0] {
-                            out.push(Stimulus {
-                                name: format!(
-                                    "{} film (x{k:.2}) at {degrees} deg under {label}",
-                                    s.label
-                                ),
-                                light: spd.clone(),
-                                surface: Seen::Film {
-                                    stack: stack.clone(),
-                                    incidence: Incidence::degrees(degrees)?,
-                                    coherence: Coherence::Coherent,
-                                },
-                            });
-                        }
-                    }
-                }
-            }
-        }
-        Ok(out)
-    }
-
     /// Checks the scene's consistency (indices, sizes, films) before any work is done.
     pub fn validate(&self) -> Result<()> {
         if self.width == 0 || self.height == 0 {
@@ -410,6 +355,16 @@ impl Scene {
     /// Renders on the CPU.
     pub fn render_cpu(&self, spectral: &Spectral) -> Result<Image> {
         let p = prepare::Prepared::new(self, spectral)?;
+        Ok(cpu::render(&p))
+    }
+
+    /// Renders on the CPU with the quadrature `q`, in the output space `space`.
+    pub fn render_cpu_with(
+        &self,
+        q: &crate::quadrature::Quadrature,
+        space: RgbSpace,
+    ) -> Result<Image> {
+        let p = prepare::Prepared::with_quadrature(self, q, space)?;
         Ok(cpu::render(&p))
     }
 }

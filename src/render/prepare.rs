@@ -1,13 +1,16 @@
-//! A scene flattened for rendering: spectra on the render grid, pre-filtered environment maps and
+//! A scene flattened for rendering: spectra at the quadrature's nodes (the weighted CMFs are
+//! its weight triples), pre-filtered environment maps and
 //! objects, in the `#[repr(C)]` layout the WGSL shader declares. The CPU renderer reads the same
 //! arrays, so both backends see the same numbers.
 
 use super::env::{self, CoeffMap};
 use super::{Lighting, Scene, Shape, Spectral, MAX_LAYERS};
-use crate::colorimetry::{Cmfs, Observer};
+use crate::colorimetry::RgbSpace;
 use crate::error::{Error, Result};
-use crate::spectrum::{Interpolation, Rule, Spectrum, WavelengthGrid};
+use crate::quadrature::Quadrature;
+use crate::spectrum::Interpolation;
 use crate::thinfilm::{Film, Index, Stack};
+use crate::tradeoff::sample;
 use bytemuck::{Pod, Zeroable};
 
 /// Object kinds (`GpuObject::kind`).
@@ -29,7 +32,7 @@ pub struct Params {
     pub n_wl: u32,
     pub n_objects: u32,
     pub background: u32,
-    /// Offset in `spectra` of the weighted CMFs x, y, z (n_wl each).
+    /// Offset in `spectra` of the quadrature's x, y, z weights over `sum w_y` (n_wl each).
     pub cmf_offset: u32,
     pub wl_offset: u32,
     pub _pad: u32,
@@ -112,45 +115,42 @@ pub struct Prepared {
     pub films: Vec<Option<CpuFilm>>,
 }
 
-/// Y of `s` on the grid: `sum w s ybar / sum w ybar`.
-fn luminance(s: &Spectrum, cmfs: &Cmfs, rule: Rule) -> Result<f64> {
-    Ok(s.try_mul(&cmfs.y)?.integrate(rule) / cmfs.y.integrate(rule))
+/// Y of values at the nodes, relative to an equal-energy spectrum: `sum w_y s / sum w_y`.
+fn luminance(s: &[f64], q: &Quadrature) -> f64 {
+    q.integrate(s)[1] / q.sum()[1]
 }
 
-/// The four spectra a lighting's coefficients expand with, on `grid`: `B_j = MCC_j * S * k` with
-/// `Y(S k) = 1`, and `E / Y(E)`.
-pub fn lighting_spectra(
-    l: &Lighting,
-    grid: &WavelengthGrid,
-    rule: Rule,
-    observer: Observer,
-) -> Result<[Vec<f64>; 4]> {
-    let cmfs = Cmfs::new(observer, grid)?;
-    let s = l.light.resample(grid, Interpolation::LIGHT);
-    let ys = luminance(&s, &cmfs, rule)?;
+/// The four spectra a lighting's coefficients expand with, at the quadrature's nodes:
+/// `B_j = MCC_j * S * k` with `Y(S k) = 1`, and `E / Y(E)`.
+pub fn lighting_spectra(l: &Lighting, q: &Quadrature) -> Result<[Vec<f64>; 4]> {
+    let nodes = q.nodes_nm();
+    let on = || -> String { q.describe() };
+    let s = sample(&l.light, nodes, Interpolation::LIGHT);
+    let ys = luminance(&s, q);
     if !(ys.is_finite() && ys > 0.0) {
         return Err(Error::invalid(format!(
-            "the light {} has no visible energy on the grid {grid}",
-            l.label
+            "the light {} has no visible energy on the wavelengths {}",
+            l.label,
+            on()
         )));
     }
-    let s = s.scaled(1.0 / ys);
-    let b = |j: usize| -> Result<Vec<f64>> {
-        Ok(l.basis_reflectance[j]
-            .resample(grid, Interpolation::SMOOTH)
-            .try_mul(&s)?
-            .values()
-            .to_vec())
+    let b = |j: usize| -> Vec<f64> {
+        sample(&l.basis_reflectance[j], nodes, Interpolation::SMOOTH)
+            .iter()
+            .zip(&s)
+            .map(|(r, s)| r * s / ys)
+            .collect()
     };
-    let e = l.e_spd.resample(grid, Interpolation::LIGHT);
-    let ye = luminance(&e, &cmfs, rule)?;
+    let e = sample(&l.e_spd, nodes, Interpolation::LIGHT);
+    let ye = luminance(&e, q);
     if !(ye.is_finite() && ye > 0.0) {
         return Err(Error::invalid(format!(
-            "the SPD {} has no visible energy on the grid {grid}",
-            l.e_label
+            "the SPD {} has no visible energy on the wavelengths {}",
+            l.e_label,
+            on()
         )));
     }
-    Ok([b(0)?, b(1)?, b(2)?, e.scaled(1.0 / ye).values().to_vec()])
+    Ok([b(0), b(1), b(2), e.iter().map(|v| v / ye).collect()])
 }
 
 fn offset(v: &[f32]) -> Result<u32> {
@@ -169,27 +169,25 @@ fn f4(v: [f64; 4]) -> [f32; 4] {
 }
 
 impl Prepared {
-    /// Flattens `scene` for `spectral`: spectra on its grid, maps filtered per lighting and
-    /// shininess.
+    /// Flattens `scene` for `spectral`'s uniform grid and rule (see [`Prepared::with_quadrature`]).
     pub fn new(scene: &Scene, spectral: &Spectral) -> Result<Prepared> {
+        let q = Quadrature::uniform(spectral.grid, spectral.rule, spectral.observer)?;
+        Prepared::with_quadrature(scene, &q, spectral.space)
+    }
+
+    /// Flattens `scene` for the quadrature `q` and the output space: spectra at its nodes, maps
+    /// filtered per lighting and shininess.
+    pub fn with_quadrature(scene: &Scene, q: &Quadrature, space: RgbSpace) -> Result<Prepared> {
         scene.validate()?;
-        let grid = spectral.grid;
-        let n = grid.len();
-        let wavelengths_nm: Vec<f64> = grid.wavelengths_nm().collect();
+        let n = q.len();
+        let wavelengths_nm: Vec<f64> = q.nodes_nm().to_vec();
         let mut spectra: Vec<f32> = Vec::new();
 
         // Weighted CMFs: XYZ = sum_i cmf_w(i) I(i), a perfect white under a Y = 1 light -> Y = 1.
-        let cmfs = Cmfs::new(spectral.observer, &grid)?;
-        let w = spectral.rule.weights(n, grid.step_nm());
-        let norm: f64 = (0..n).map(|i| w[i] * cmfs.y.values()[i]).sum();
-        if norm.is_nan() || norm <= 0.0 {
-            return Err(Error::invalid(format!(
-                "the observer sees nothing on the grid {grid}"
-            )));
-        }
+        let norm = q.sum()[1];
         let cmf_offset = offset(&spectra)?;
-        for c in [&cmfs.x, &cmfs.y, &cmfs.z] {
-            spectra.extend((0..n).map(|i| (w[i] * c.values()[i] / norm) as f32));
+        for c in 0..3 {
+            spectra.extend(q.weights().iter().map(|w| (w[c] / norm) as f32));
         }
         let wl_offset = offset(&spectra)?;
         spectra.extend(wavelengths_nm.iter().map(|&v| v as f32));
@@ -200,7 +198,7 @@ impl Prepared {
         let mut lightings = Vec::new();
         let mut spec_index: Vec<Vec<(f64, u32)>> = Vec::new();
         for (li, l) in scene.lightings.iter().enumerate() {
-            let sp = lighting_spectra(l, &grid, spectral.rule, spectral.observer)?;
+            let sp = lighting_spectra(l, q)?;
             let off = offset(&spectra)?;
             for s in &sp {
                 spectra.extend(s.iter().map(|&v| v as f32));
@@ -257,8 +255,8 @@ impl Prepared {
             if let Some(rd) = &s.diffuse {
                 flags |= HAS_DIFFUSE;
                 diffuse_offset = offset(&spectra)?;
-                let r = rd.resample(&grid, Interpolation::SMOOTH);
-                spectra.extend(r.values().iter().map(|&v| v as f32));
+                let r = sample(rd, &wavelengths_nm, Interpolation::SMOOTH);
+                spectra.extend(r.iter().map(|&v| v as f32));
             }
             if s.transparent {
                 flags |= TRANSPARENT;
@@ -376,7 +374,7 @@ impl Prepared {
         if spectra.len() > u32::MAX as usize {
             return Err(Error::invalid("spectral data exceeds 4 G values"));
         }
-        let m = spectral.space.from_xyz_matrix();
+        let m = space.from_xyz_matrix();
         let row = |r: usize| [m[(r, 0)] as f32, m[(r, 1)] as f32, m[(r, 2)] as f32, 0.0];
         let pixel = 2.0 * scene.view.half_height / scene.height as f64;
         let params = Params {

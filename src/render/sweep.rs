@@ -1,11 +1,13 @@
 //! The speed-for-accuracy curve: one scene rendered at several wavelength counts on one backend,
-//! each frame timed and compared (CIEDE2000) with the 1 nm render of the same backend.
+//! each frame timed and compared (CIEDE2000) with the 1 nm render of the same backend; and the
+//! same measurement for any quadrature ([`measure`]).
 
 use super::gpu::Gpu;
 use super::prepare::Prepared;
 use super::{compare, cpu, Backend, Image, Scene, Spectral};
 use crate::error::{Error, Result};
 use crate::plot::{self, Figure, Series};
+use crate::quadrature::Quadrature;
 use std::path::Path;
 use std::time::Instant;
 
@@ -123,6 +125,55 @@ pub fn sweep(
         reference_step_nm: REFERENCE_STEP_NM,
         reference_frame_ms: ref_ms,
         rows,
+    })
+}
+
+/// One quadrature rendered on one backend: the fastest frame and the image's error against a
+/// reference render.
+#[derive(Debug, Clone, Copy, serde::Serialize)]
+pub struct Measured {
+    pub frame_ms: f64,
+    /// GPU only: with upload and readback.
+    pub frame_with_transfers_ms: Option<f64>,
+    pub comparison: super::Comparison,
+}
+
+/// The scene rendered at 1 nm by Simpson's rule on `backend`: what [`measure`] compares with.
+pub fn reference(
+    scene: &Scene,
+    observer: crate::colorimetry::Observer,
+    space: crate::colorimetry::RgbSpace,
+    backend: Backend,
+    gpu: Option<&Gpu>,
+) -> Result<Image> {
+    let grid = crate::spectrum::WavelengthGrid::new(380.0, 780.0, REFERENCE_STEP_NM)?;
+    let q = Quadrature::uniform(grid, crate::spectrum::Rule::Simpson, observer)?;
+    Ok(frame(
+        &Prepared::with_quadrature(scene, &q, space)?,
+        backend,
+        gpu,
+        1,
+    )?
+    .0)
+}
+
+/// Renders `scene` with `q` on `backend` (the fastest of `repeats` frames) and compares the
+/// image with `reference` in `space`.
+pub fn measure(
+    scene: &Scene,
+    q: &Quadrature,
+    space: crate::colorimetry::RgbSpace,
+    backend: Backend,
+    gpu: Option<&Gpu>,
+    repeats: usize,
+    reference: &Image,
+) -> Result<Measured> {
+    let p = Prepared::with_quadrature(scene, q, space)?;
+    let (img, frame_ms, frame_with_transfers_ms) = frame(&p, backend, gpu, repeats)?;
+    Ok(Measured {
+        frame_ms,
+        frame_with_transfers_ms,
+        comparison: compare(reference, &img, &space)?,
     })
 }
 

@@ -1,5 +1,7 @@
-"""`--tolerance` checked independently: the grid specmap chooses keeps every colour of the scene
-within the tolerance of a 1 nm Simpson reference, and every coarser candidate step does not.
+"""`--tolerance` with uniform grids checked independently (`color --quadrature uniform`,
+`convert`): the grid specmap chooses keeps every colour of the scene within the tolerance of a
+1 nm Simpson reference, and every coarser candidate step does not. (The scene quadratures are
+checked in test_quadrature.py.)
 
 The reference side is numpy + colour-science: colour's datasets, its CMFs, its Sprague
 interpolation for reflectances, linear interpolation for lights (the convention specmap follows,
@@ -85,7 +87,7 @@ def check_choice(step, light, reflectances):
 
 @pytest.mark.parametrize("name", list(LIGHTS))
 def test_color_tolerance_of_a_light(specmap, name):
-    out = specmap("color", name, "--tolerance", str(TOL))
+    out = specmap("color", name, "--tolerance", str(TOL), "--quadrature", "uniform")
     choice = out["grid_choice"]
     assert choice["met"] and choice["max_dE2000"] <= TOL
     assert out["range"] == choice["grid"]
@@ -113,6 +115,6 @@ def test_convert_tolerance_keeps_the_colorchecker_within_it(specmap, tmp_path, n
 
 
 def test_spiky_lights_get_finer_grids(specmap):
-    step = {n: specmap("color", n, "--tolerance", str(TOL))["grid_choice"]["step_nm"]
+    step = {n: specmap("color", n, "--tolerance", str(TOL), "--quadrature", "uniform")["grid_choice"]["step_nm"]
             for n in ("D65", "FL2", "lps")}
     assert step["FL2"] < step["D65"] and step["lps"] < step["D65"], step

@@ -1,0 +1,269 @@
+//! `--tolerance`: the cheapest quadrature (fewest nodes) whose estimated error over a scene's
+//! stimuli meets the target, among the scene's fitted quadrature and the uniform grids at their
+//! best rule.
+
+use super::estimate::{worst, Estimator, White};
+use super::fit::{self, Options};
+use super::{Kind, Quadrature};
+use crate::colorimetry::Observer;
+use crate::error::{Error, Result};
+use crate::spectrum::{Rule, WavelengthGrid};
+use crate::tradeoff::{Stimulus, STEPS_NM};
+
+/// Which quadratures to choose among.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Family {
+    /// The scene's fitted quadrature, or a uniform grid where that is cheaper or the fit fails.
+    Scene,
+    /// Uniform grids only.
+    Uniform,
+}
+
+/// One uniform grid and rule tried.
+#[derive(Debug, Clone, Copy, serde::Serialize)]
+pub struct UniformTried {
+    pub step_nm: f64,
+    pub samples: usize,
+    pub rule: Rule,
+    #[serde(rename = "max_dE2000")]
+    pub max: f64,
+}
+
+/// The cheapest uniform grid that meets the target.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct UniformChoice {
+    #[serde(skip)]
+    pub quadrature: Quadrature,
+    pub grid: String,
+    pub rule: Rule,
+    pub samples: usize,
+    pub estimate_de2000: f64,
+    pub met: bool,
+    /// The best rule of every step tried, coarsest first.
+    pub tried: Vec<UniformTried>,
+}
+
+/// The stimuli of a scene and how to judge them.
+#[derive(Debug, Clone)]
+pub struct Scene<'a> {
+    pub fit: &'a [Stimulus],
+    pub held_out: &'a [Stimulus],
+    pub observer: Observer,
+    pub start_nm: f64,
+    pub end_nm: f64,
+    pub white: White,
+}
+
+/// What `--tolerance` chose.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Selection {
+    #[serde(skip)]
+    pub quadrature: Quadrature,
+    pub kind: Kind,
+    pub family: Family,
+    pub tolerance_de2000: f64,
+    pub target_de2000: f64,
+    /// The chosen quadrature's largest error over the fit and held-out stimuli.
+    pub estimate_de2000: f64,
+    pub met: bool,
+    /// Why this one.
+    pub reason: String,
+    /// The scene fit (with `--quadrature scene`).
+    pub scene: Option<fit::Choice>,
+    pub uniform: UniformChoice,
+}
+
+/// The error of `q` over both sets.
+fn estimate(fit: &Estimator, held: Option<&Estimator>, q: &Quadrature) -> Result<f64> {
+    let mut e = fit.errors(q)?;
+    if let Some(h) = held {
+        e.extend(h.errors(q)?);
+    }
+    Ok(worst(&e).1)
+}
+
+/// The coarsest step of [`STEPS_NM`] dividing the range whose best rule meets `target`; the
+/// finest step tried when none does.
+pub fn cheapest_uniform(
+    fit: &Estimator,
+    held: Option<&Estimator>,
+    target: f64,
+) -> Result<UniformChoice> {
+    let g = fit.grid();
+    let mut tried = Vec::new();
+    let mut last = None;
+    for step in STEPS_NM {
+        let Ok(grid) = WavelengthGrid::new(g.start_nm(), g.end_nm(), step) else {
+            continue;
+        };
+        let mut best: Option<(Quadrature, f64)> = None;
+        for rule in Rule::ALL {
+            let q = Quadrature::uniform(grid, rule, fit.observer())?;
+            let e = estimate(fit, held, &q)?;
+            if best.as_ref().is_none_or(|b| e < b.1) {
+                best = Some((q, e));
+            }
+        }
+        let (q, e) = best.expect("three rules");
+        let rule = q.uniform_grid().map_or(Rule::Riemann, |(_, r)| r);
+        tried.push(UniformTried {
+            step_nm: step,
+            samples: grid.len(),
+            rule,
+            max: e,
+        });
+        let choice = UniformChoice {
+            grid: grid.to_string(),
+            rule,
+            samples: grid.len(),
+            estimate_de2000: e,
+            met: e <= target,
+            tried: tried.clone(),
+            quadrature: q,
+        };
+        if choice.met {
+            return Ok(choice);
+        }
+        last = Some(choice);
+    }
+    last.ok_or_else(|| {
+        Error::invalid(format!(
+            "no step of {STEPS_NM:?} nm divides the range {}..{} nm",
+            g.start_nm(),
+            g.end_nm()
+        ))
+    })
+}
+
+/// Chooses the quadrature for `scene` at `opts` (see the module docs).
+pub fn select(scene: &Scene, family: Family, opts: &Options) -> Result<Selection> {
+    fit::check_tolerance(opts.tolerance)?;
+    let est = |s: &[Stimulus]| {
+        Estimator::new(s, scene.observer, scene.start_nm, scene.end_nm, scene.white)
+    };
+    let fit_set = est(scene.fit)?;
+    let held = if scene.held_out.is_empty() {
+        None
+    } else {
+        Some(est(scene.held_out)?)
+    };
+    let uniform = cheapest_uniform(&fit_set, held.as_ref(), opts.target())?;
+    let fitted = match family {
+        Family::Scene => Some(fit::fit(&fit_set, held.as_ref(), opts)?),
+        Family::Uniform => None,
+    };
+    let (quadrature, estimate_de2000, met, reason) = match &fitted {
+        Some(f) if f.met && (!uniform.met || f.quadrature.len() <= uniform.samples) => (
+            f.quadrature.clone(),
+            f.estimate_de2000,
+            true,
+            format!(
+                "{} nodes meet the target; the cheapest uniform grid that does has {}",
+                f.quadrature.len(),
+                if uniform.met {
+                    uniform.samples.to_string()
+                } else {
+                    "none".into()
+                }
+            ),
+        ),
+        Some(f) if !f.met && !uniform.met && f.estimate_de2000 < uniform.estimate_de2000 => (
+            f.quadrature.clone(),
+            f.estimate_de2000,
+            false,
+            "nothing meets the target; the scene fit errs least".into(),
+        ),
+        Some(f) => (
+            uniform.quadrature.clone(),
+            uniform.estimate_de2000,
+            uniform.met,
+            if f.met {
+                "the uniform grid is as cheap".into()
+            } else {
+                format!(
+                    "the scene fit misses the target with {} nodes",
+                    f.quadrature.len()
+                )
+            },
+        ),
+        None => (
+            uniform.quadrature.clone(),
+            uniform.estimate_de2000,
+            uniform.met,
+            "--quadrature uniform".into(),
+        ),
+    };
+    Ok(Selection {
+        kind: quadrature.kind(),
+        quadrature,
+        family,
+        tolerance_de2000: opts.tolerance,
+        target_de2000: opts.target(),
+        estimate_de2000,
+        met,
+        reason,
+        scene: fitted,
+        uniform,
+    })
+}
+
+/// The stimuli `color --tolerance` fits a quadrature to: the colour asked for, its light seen
+/// directly, the 24 ColorChecker patches and smooth reflectances ([`smooth_reflectances`])
+/// centred every 10 nm under it; held out, those centred half way between. So the
+/// quadrature holds for the light and smooth colours under it, not only for the one colour (one
+/// node and three free weights reproduce any single colour exactly, and say nothing about the
+/// next).
+pub fn for_colour(stimulus: Stimulus, light_label: &str) -> Result<(Vec<Stimulus>, Vec<Stimulus>)> {
+    let light = stimulus.light.clone();
+    let under = |set: Vec<(String, crate::spectrum::Tabulated)>| -> Vec<Stimulus> {
+        set.into_iter()
+            .map(|(name, r)| {
+                Stimulus::new(
+                    format!("{name} under {light_label}"),
+                    light.clone(),
+                    crate::tradeoff::Surface::Reflectance(r),
+                )
+            })
+            .collect()
+    };
+    let mut fit = vec![stimulus.clone()];
+    fit.extend(crate::tradeoff::colorchecker_under(light_label, &light)?);
+    fit.extend(under(smooth_reflectances(420.0, 10.0)?));
+    Ok((fit, under(smooth_reflectances(425.0, 10.0)?)))
+}
+
+/// Smooth reflectances between 0.05 and 0.95 at 5 nm, centred every `step_nm` from
+/// `first_nm` to 720 nm (where xbar fades: a red edge such as foliage's lies there): rising and
+/// falling edges (logistic, 15 and 50 nm wide) and bumps (Gaussian, 25, 50 and 100 nm wide).
+pub fn smooth_reflectances(
+    first_nm: f64,
+    step_nm: f64,
+) -> Result<Vec<(String, crate::spectrum::Tabulated)>> {
+    let wl: Vec<f64> = (0..=80).map(|i| 380.0 + 5.0 * i as f64).collect();
+    let mut out = Vec::new();
+    let mut c = first_nm;
+    while c <= 720.0 {
+        let edge = |s: f64| move |w: f64| 1.0 / (1.0 + (-(w - c) / s).exp());
+        let bump = |s: f64| move |w: f64| (-0.5 * ((w - c) / s).powi(2)).exp();
+        let (sharp, slow) = (edge(15.0), edge(50.0));
+        let shapes: [(&str, &dyn Fn(f64) -> f64); 7] = [
+            ("edge up", &sharp),
+            ("edge down", &|w| 1.0 - sharp(w)),
+            ("slow edge up", &slow),
+            ("slow edge down", &|w| 1.0 - slow(w)),
+            ("25 nm bump", &bump(25.0)),
+            ("50 nm bump", &bump(50.0)),
+            ("100 nm bump", &bump(100.0)),
+        ];
+        for (name, f) in shapes {
+            let values = wl.iter().map(|&w| 0.05 + 0.9 * f(w)).collect();
+            out.push((
+                format!("{name} at {c} nm"),
+                crate::spectrum::Tabulated::new(wl.clone(), values)?,
+            ));
+        }
+        c += step_nm;
+    }
+    Ok(out)
+}

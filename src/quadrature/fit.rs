@@ -1,0 +1,543 @@
+//! A quadrature fitted to a scene: the fewest nodes, and their weights, that keep every stimulus
+//! the scene can produce within a colour tolerance of its 1 nm colour.
+//!
+//! The pipeline, each stage a value that [`Choice`] reports:
+//! 1. **lines**: a node on every emission line of the scene's lights that carries at least
+//!    [`LINE_SHARE`] of the light's X, Y or Z (a knot of the light standing above the continuum
+//!    around it);
+//! 2. **greedy nodes**: while the largest error over the fit set or the held-out set exceeds the
+//!    target, add the 1 nm wavelength whose least-squares weights ([`super::lsq`]) give the
+//!    smallest largest residual, then move each node to the nearby wavelength that lowers it most
+//!    (the continuum gets as few nodes as the materials' smoothness allows: a film with fringes
+//!    needs more than a pigment);
+//! 3. **minimax weights** for each node set tried (Lawson), checked on the held-out set;
+//! 4. **pruning**: drop every node the target does not need.
+//!
+//! The target is `margin * tolerance`: the stimuli sample the scene's angles, thicknesses and
+//! pigments, and the image mixes them, so the estimate keeps room for what the samples miss.
+
+use super::estimate::{worst, Estimator};
+use super::lsq::Problem;
+use super::{Kind, Quadrature};
+use crate::error::{Error, Result};
+use crate::spectrum::Rule;
+use rayon::prelude::*;
+
+/// A knot of a light is a line when the light's excess over its continuum there carries this
+/// share of the light's X, Y or Z.
+pub const LINE_SHARE: f64 = 0.02;
+
+/// How far (nm) a node may move in one refinement step.
+const MOVES_NM: [isize; 8] = [-6, -3, -2, -1, 1, 2, 3, 6];
+
+/// The greedy stage goes on until the largest error is this fraction of the target, so that
+/// pruning has nodes to choose among.
+const OVERSHOOT: f64 = 0.5;
+
+/// Candidate nodes judged by their minimax error at each greedy step.
+const SHORTLIST: usize = 6;
+
+/// The greedy stage stops after this many nodes without a lower largest error.
+const PATIENCE: usize = 6;
+
+/// What the fit aims at.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Options {
+    /// The CIEDE2000 every stimulus must stay within.
+    pub tolerance: f64,
+    /// The estimate must be at most `margin * tolerance`.
+    pub margin: f64,
+    /// Give up (and report the best found) beyond this many nodes.
+    pub max_nodes: usize,
+}
+
+impl Options {
+    /// The defaults for a tolerance: margin 0.8, at most 40 nodes.
+    pub fn new(tolerance: f64) -> Result<Options> {
+        check_tolerance(tolerance)?;
+        Ok(Options {
+            tolerance,
+            margin: 0.8,
+            max_nodes: 40,
+        })
+    }
+    pub fn target(&self) -> f64 {
+        self.margin * self.tolerance
+    }
+}
+
+/// A tolerance must be a CIEDE2000 difference in (0, 100].
+pub fn check_tolerance(tolerance: f64) -> Result<()> {
+    if !(tolerance.is_finite() && tolerance > 0.0 && tolerance <= 100.0) {
+        return Err(Error::invalid(format!(
+            "--tolerance {}: a CIEDE2000 difference between 0 and 100 (1 is about a just \
+             noticeable difference)",
+            crate::spectrum::fmt_num(tolerance)
+        )));
+    }
+    Ok(())
+}
+
+/// One node count tried.
+#[derive(Debug, Clone, Copy, serde::Serialize)]
+pub struct Tried {
+    pub nodes: usize,
+    #[serde(rename = "fit_max_dE2000")]
+    pub fit_max: f64,
+    #[serde(rename = "held_out_max_dE2000")]
+    pub held_out_max: f64,
+}
+
+/// What the fit chose, and why.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Choice {
+    #[serde(skip)]
+    pub quadrature: Quadrature,
+    pub tolerance_de2000: f64,
+    /// `margin * tolerance`, what the estimate had to meet.
+    pub target_de2000: f64,
+    /// The largest error over the fit set and the held-out set: the estimate.
+    pub estimate_de2000: f64,
+    #[serde(rename = "fit_max_dE2000")]
+    pub fit_max: f64,
+    #[serde(rename = "held_out_max_dE2000")]
+    pub held_out_max: f64,
+    #[serde(rename = "held_out_mean_dE2000")]
+    pub held_out_mean: f64,
+    /// The stimulus with the largest error.
+    pub worst: String,
+    pub met: bool,
+    /// The nodes put on emission lines.
+    pub lines_nm: Vec<f64>,
+    /// Node counts on the way, with their errors.
+    pub tried: Vec<Tried>,
+    /// Stimuli fitted and held out.
+    pub stimuli: usize,
+    pub held_out: usize,
+}
+
+/// Grid indices of the lines of the estimator's lights (see [`LINE_SHARE`]).
+pub fn lines(est: &Estimator) -> Vec<usize> {
+    let grid = est.grid;
+    let Ok(reference) = Quadrature::uniform(grid, Rule::Simpson, est.observer) else {
+        return Vec::new();
+    };
+    let mut out: Vec<usize> = Vec::new();
+    let mut seen: Vec<&[f64]> = Vec::new();
+    for l in &est.light {
+        if seen.contains(&&l[..]) {
+            continue;
+        }
+        seen.push(l);
+        let total = reference.integrate(l);
+        let n = l.len();
+        for j in 1..n.saturating_sub(1) {
+            if !(l[j] >= l[j - 1] && l[j] >= l[j + 1] && l[j] > l[j - 1].min(l[j + 1])) {
+                continue;
+            }
+            let side = |r: std::ops::Range<usize>| r.map(|k| l[k]).fold(f64::INFINITY, f64::min);
+            let base = side(j.saturating_sub(10)..j).max(side(j + 1..(j + 11).min(n)));
+            let excess: Vec<f64> = (0..n)
+                .map(|k| {
+                    if k.abs_diff(j) <= 6 {
+                        (l[k] - base).max(0.0)
+                    } else {
+                        0.0
+                    }
+                })
+                .collect();
+            let e = reference.integrate(&excess);
+            if (0..3).any(|c| total[c] > 0.0 && e[c] >= LINE_SHARE * total[c]) && !out.contains(&j)
+            {
+                out.push(j);
+            }
+        }
+    }
+    out.sort_unstable();
+    out
+}
+
+/// Fits the quadrature (see the module docs). `held_out` checks what the fit did not see; a
+/// scene without continuous parameters (no film) may have none.
+pub fn fit(train: &Estimator, held_out: Option<&Estimator>, opts: &Options) -> Result<Choice> {
+    check_tolerance(opts.tolerance)?;
+    if held_out.is_some_and(|h| train.grid != h.grid || train.observer != h.observer) {
+        return Err(Error::invalid(
+            "the held-out stimuli are on another grid or for another observer",
+        ));
+    }
+    let p = Problem::new(train)?;
+    let line_nodes = lines(train);
+    let target = opts.target();
+    let mut cols = line_nodes.clone();
+    cols.truncate(opts.max_nodes);
+    let mut tried = Vec::new();
+    let mut best: Option<Candidate> = None;
+    let mut since_best = 0;
+    loop {
+        if let Some(c) = Candidate::new(&p, held_out, &cols, None)? {
+            tried.push(Tried {
+                nodes: cols.len(),
+                fit_max: c.fit_max,
+                held_out_max: c.held_out_max,
+            });
+            // Beyond the target, a few more nodes give pruning room to choose from.
+            let done = c.max() <= OVERSHOOT * target;
+            if best.as_ref().is_none_or(|b| c.max() < 0.99 * b.max()) {
+                best = Some(c);
+                since_best = 0;
+            } else {
+                since_best += 1;
+            }
+            // More nodes that fit better but not the held-out set: the fit set is exhausted.
+            if done || since_best >= PATIENCE {
+                break;
+            }
+        }
+        if cols.len() >= opts.max_nodes {
+            break;
+        }
+        let Some(j) = next_node(&p, held_out, &cols, best.as_ref())? else {
+            break;
+        };
+        cols.push(j);
+        cols.sort_unstable();
+        refine(&p, &mut cols, &line_nodes);
+    }
+    let mut best = best.ok_or_else(|| {
+        Error::invalid("no node set gives finite colours: the lights have no visible energy")
+    })?;
+    if best.max() <= target {
+        best = prune(&p, held_out, best, target, &line_nodes)?;
+    }
+    let mut choice = best.into_choice(train, held_out, opts, &line_nodes);
+    choice.tried = tried;
+    Ok(choice)
+}
+
+/// A node set with its minimax weights and errors.
+struct Candidate {
+    cols: Vec<usize>,
+    /// Lawson's row weights.
+    rows: Vec<f64>,
+    quadrature: Quadrature,
+    fit: Vec<f64>,
+    fit_max: f64,
+    held_out: Vec<f64>,
+    held_out_max: f64,
+}
+
+impl Candidate {
+    /// Minimax weights for `cols`, Lawson started from `start`'s row weights.
+    fn new(
+        p: &Problem,
+        held_out: Option<&Estimator>,
+        cols: &[usize],
+        start: Option<&Candidate>,
+    ) -> Result<Option<Candidate>> {
+        if cols.is_empty() {
+            return Ok(None);
+        }
+        let Some(m) = p.minimax(cols, start.map(|c| &c.rows[..])) else {
+            return Ok(None);
+        };
+        let (w, fit) = (m.weights, m.errors);
+        let nodes = cols.iter().map(|&j| p.est.grid.wavelength_nm(j)).collect();
+        let Ok(quadrature) = Quadrature::new(Kind::Scene, p.est.observer, nodes, w) else {
+            return Ok(None);
+        };
+        let h = match held_out {
+            Some(e) => e.errors(&quadrature)?,
+            None => Vec::new(),
+        };
+        Ok(Some(Candidate {
+            cols: cols.to_vec(),
+            rows: m.rows,
+            fit_max: worst(&fit).1,
+            held_out_max: worst(&h).1,
+            fit,
+            held_out: h,
+            quadrature,
+        }))
+    }
+
+    fn max(&self) -> f64 {
+        self.fit_max.max(self.held_out_max)
+    }
+
+    fn into_choice(
+        self,
+        train: &Estimator,
+        held_out: Option<&Estimator>,
+        opts: &Options,
+        lines: &[usize],
+    ) -> Choice {
+        let (fi, fmax, _) = worst(&self.fit);
+        let (hi, hmax, hmean) = worst(&self.held_out);
+        let worst = match held_out {
+            Some(h) if hmax > fmax => format!("{} (held out)", h.stimuli()[hi].name),
+            _ => train.stimuli()[fi].name.clone(),
+        };
+        Choice {
+            tolerance_de2000: opts.tolerance,
+            target_de2000: opts.target(),
+            estimate_de2000: self.max(),
+            fit_max: fmax,
+            held_out_max: hmax,
+            held_out_mean: hmean,
+            worst,
+            met: self.max() <= opts.target(),
+            lines_nm: lines.iter().map(|&j| train.grid.wavelength_nm(j)).collect(),
+            tried: Vec::new(),
+            stimuli: train.len(),
+            held_out: held_out.map_or(0, |h| h.len()),
+            quadrature: self.quadrature,
+        }
+    }
+}
+
+/// The plain least-squares residual of a node set (infinite when it cannot be solved).
+fn residual(p: &Problem, cols: &[usize]) -> f64 {
+    p.solve_unit(cols)
+        .map_or(f64::INFINITY, |w| p.surrogate(cols, &w))
+}
+
+/// The wavelength (grid index) not in `cols` to add: of the [`SHORTLIST`] with the smallest
+/// least-squares residual, the one whose minimax weights give the smallest largest error.
+fn next_node(
+    p: &Problem,
+    held_out: Option<&Estimator>,
+    cols: &[usize],
+    current: Option<&Candidate>,
+) -> Result<Option<usize>> {
+    let mut ranked: Vec<(usize, f64)> = (0..p.est.grid.len())
+        .into_par_iter()
+        .filter(|j| !cols.contains(j))
+        .map(|j| (j, residual(p, &with(cols, j))))
+        .filter(|(_, r)| r.is_finite())
+        .collect();
+    ranked.sort_by(|a, b| a.1.total_cmp(&b.1));
+    ranked.truncate(SHORTLIST);
+    let judged = ranked
+        .par_iter()
+        .map(|&(j, _)| {
+            Ok(Candidate::new(p, held_out, &with(cols, j), current)?.map(|c| (j, c.max())))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    Ok(judged
+        .into_iter()
+        .flatten()
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(j, _)| j))
+}
+
+/// `cols` with `j` added, sorted.
+fn with(cols: &[usize], j: usize) -> Vec<usize> {
+    let mut c = cols.to_vec();
+    c.push(j);
+    c.sort_unstable();
+    c
+}
+
+/// Moves each node (not the lines) to the nearby wavelength that lowers the residual, until no
+/// move does.
+fn refine(p: &Problem, cols: &mut Vec<usize>, fixed: &[usize]) {
+    let len = p.est.grid.len() as isize;
+    let mut current = residual(p, cols);
+    for _ in 0..8 {
+        let mut improved = false;
+        for i in 0..cols.len() {
+            if fixed.contains(&cols[i]) {
+                continue;
+            }
+            let best = MOVES_NM
+                .par_iter()
+                .filter_map(|&d| {
+                    let j = cols[i] as isize + d;
+                    if !(0..len).contains(&j) || cols.contains(&(j as usize)) {
+                        return None;
+                    }
+                    let mut c = cols.clone();
+                    c[i] = j as usize;
+                    c.sort_unstable();
+                    Some((c.clone(), residual(p, &c)))
+                })
+                .min_by(|a, b| a.1.total_cmp(&b.1));
+            if let Some((c, r)) = best {
+                if r < current {
+                    *cols = c;
+                    current = r;
+                    improved = true;
+                }
+            }
+        }
+        if !improved {
+            return;
+        }
+    }
+}
+
+/// Moves each node (not the lines) to the nearby wavelength that lowers the largest error of
+/// the minimax weights (fit and held out), until no move does. Per node, the two moves with the
+/// smallest least-squares residual are tried.
+fn polish(
+    p: &Problem,
+    held_out: Option<&Estimator>,
+    mut best: Candidate,
+    fixed: &[usize],
+) -> Result<Candidate> {
+    let len = p.est.grid.len() as isize;
+    for _ in 0..4 {
+        let mut improved = false;
+        for i in 0..best.cols.len() {
+            if fixed.contains(&best.cols[i]) {
+                continue;
+            }
+            let mut tries: Vec<(Vec<usize>, f64)> = MOVES_NM
+                .par_iter()
+                .filter_map(|&d| {
+                    let j = best.cols[i] as isize + d;
+                    if !(0..len).contains(&j) || best.cols.contains(&(j as usize)) {
+                        return None;
+                    }
+                    let mut c = best.cols.clone();
+                    c[i] = j as usize;
+                    c.sort_unstable();
+                    let r = residual(p, &c);
+                    Some((c, r))
+                })
+                .collect();
+            tries.sort_by(|a, b| a.1.total_cmp(&b.1));
+            tries.truncate(2);
+            let found = tries
+                .par_iter()
+                .map(|(c, _)| Candidate::new(p, held_out, c, Some(&best)))
+                .collect::<Result<Vec<_>>>()?
+                .into_iter()
+                .flatten()
+                .min_by(|a, b| a.max().total_cmp(&b.max()));
+            if let Some(c) = found.filter(|c| c.max() < best.max()) {
+                best = c;
+                improved = true;
+            }
+        }
+        if !improved {
+            break;
+        }
+    }
+    Ok(best)
+}
+
+/// Drops nodes while the target stays met: each round tries every removal (minimax weights
+/// from scratch), moves the nodes of the two best into place, and keeps the first that meets
+/// the target.
+fn prune(
+    p: &Problem,
+    held_out: Option<&Estimator>,
+    mut best: Candidate,
+    target: f64,
+    fixed: &[usize],
+) -> Result<Candidate> {
+    'rounds: while best.cols.len() > 1 {
+        let mut removals: Vec<Candidate> = (0..best.cols.len())
+            .into_par_iter()
+            .map(|i| {
+                let mut c = best.cols.clone();
+                c.remove(i);
+                Candidate::new(p, held_out, &c, None)
+            })
+            .collect::<Result<Vec<_>>>()?
+            .into_iter()
+            .flatten()
+            .collect();
+        removals.sort_by(|a, b| a.max().total_cmp(&b.max()));
+        // The two most promising, with their nodes moved into place, are judged.
+        for c in removals.into_iter().take(2) {
+            let c = polish(p, held_out, c, fixed)?;
+            if c.max() <= target {
+                best = c;
+                continue 'rounds;
+            }
+        }
+        break;
+    }
+    Ok(best)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::colorimetry::Observer;
+    use crate::quadrature::estimate::White;
+    use crate::thinfilm::{Incidence, Index, Layer, Stack};
+    use crate::tradeoff::{Factor, Stimulus, Surface};
+
+    /// A 2.0-index film of `d` nm on glass at `deg` degrees under FL2, and FL2 itself.
+    fn films(thicknesses: &[f64], angles: &[f64]) -> Vec<Stimulus> {
+        let fl2 = crate::data::spectrum("FL2").unwrap().data;
+        let mut out = vec![Stimulus::emitter("FL2", fl2.clone())];
+        for &d in thicknesses {
+            let stack = Stack::new(
+                Index::real(1.0).unwrap().into(),
+                vec![Layer::new(Index::real(2.0).unwrap().into(), d).unwrap()],
+                Index::real(1.5).unwrap().into(),
+            );
+            for &deg in angles {
+                let f = Factor::FilmReflectance(stack.clone(), Incidence::degrees(deg).unwrap());
+                let name = format!("{d} nm at {deg} deg");
+                out.push(Stimulus::new(name, fl2.clone(), Surface::Product(vec![f])));
+            }
+        }
+        out
+    }
+
+    fn estimator(s: &[Stimulus]) -> Estimator {
+        Estimator::new(s, Observer::Cie1931, 380.0, 780.0, White::OwnLight).unwrap()
+    }
+
+    #[test]
+    fn a_fit_holds_on_stimuli_it_never_saw_and_a_starved_one_says_it_misses() {
+        let every = |a: f64, b: f64, step: f64| -> Vec<f64> {
+            (0..)
+                .map(|i| a + step * i as f64)
+                .take_while(|&x| x <= b)
+                .collect()
+        };
+        let fit_set = estimator(&films(&every(150.0, 450.0, 10.0), &[0.0, 30.0, 55.0, 75.0]));
+        let held = estimator(&films(
+            &every(155.0, 445.0, 10.0),
+            &[15.0, 45.0, 65.0, 85.0],
+        ));
+        let opts = Options::new(0.5).unwrap();
+        let c = fit(&fit_set, Some(&held), &opts).unwrap();
+        assert!(c.met && c.estimate_de2000 <= opts.target(), "{c:?}");
+        assert_eq!(c.lines_nm, [435.0, 545.0, 580.0]);
+        assert!(c.quadrature.len() <= 16, "{}", c.quadrature);
+        // Thicknesses and angles on neither grid.
+        let fresh = estimator(&films(&every(153.7, 450.0, 23.1), &[7.0, 38.0, 61.0, 80.0]));
+        let e = fresh.errors(&c.quadrature).unwrap();
+        let (i, max, _) = worst(&e);
+        assert!(max <= opts.tolerance, "{}: {max}", fresh.stimuli()[i].name);
+        // Two nodes cannot do it, and the choice says so rather than claiming the tolerance.
+        let starved = Options {
+            max_nodes: 2,
+            ..opts
+        };
+        let c = fit(&fit_set, Some(&held), &starved).unwrap();
+        assert!(!c.met && c.estimate_de2000 > opts.tolerance && c.quadrature.len() <= 2);
+    }
+
+    #[test]
+    fn lines_are_the_knots_that_carry_a_share_of_the_light() {
+        let one = |name: &str| {
+            let l = crate::data::spectrum(name).unwrap().data;
+            lines(&estimator(&[Stimulus::emitter(name, l)]))
+                .iter()
+                .map(|&j| 380 + j)
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(one("FL2"), [435, 545, 580]);
+        assert_eq!(one("lps"), [590]);
+        assert!(one("A").is_empty() && one("D65").is_empty());
+    }
+}

@@ -1,0 +1,306 @@
+//! Spectral quadrature: the wavelengths (nodes) a renderer samples and a weight triple per node,
+//! so that the colour of a spectrum `S` is `XYZ = sum_i w_i S(lambda_i)`.
+//!
+//! A uniform grid with an integration rule is one quadrature (`w_i = h_i cmf(lambda_i)`, `h_i`
+//! the rule's weight); so is Meyer's four-wavelength Gaussian rule ([`meyer`]); and so is the
+//! quadrature fitted to a scene ([`fit`]): nodes where its lights have lines and as few as its
+//! materials' smoothness allows between them, weights solved by least squares over the spectra
+//! the scene can produce, checked on spectra not used to fit ([`estimate`]).
+//!
+//! The weights are in the colour-matching functions' units times nm: `sum_i w_i S(lambda_i)`
+//! stands for `integral S(lambda) cmf(lambda) d lambda`. A colour relative to a light (Eq. 10/11)
+//! divides by the light's own `sum_i w_y,i L(lambda_i)`, so a perfect white has Y = 100 on every
+//! quadrature.
+
+pub mod choose;
+pub mod estimate;
+pub mod fit;
+mod lsq;
+pub mod meyer;
+
+use crate::colorimetry::{Cmfs, Observer, Xyz};
+use crate::error::{Error, Result};
+use crate::spectrum::{Rule, WavelengthGrid};
+use std::fmt;
+
+/// Where a quadrature came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Kind {
+    /// A uniform grid and an integration rule.
+    Uniform,
+    /// Meyer's (1988) Gaussian quadrature.
+    Meyer,
+    /// Fitted to a scene's spectra.
+    Scene,
+}
+
+impl fmt::Display for Kind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Kind::Uniform => "uniform",
+            Kind::Meyer => "meyer",
+            Kind::Scene => "scene",
+        })
+    }
+}
+
+/// Nodes in nm (strictly increasing) and a weight triple per node.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Quadrature {
+    kind: Kind,
+    observer: Observer,
+    nodes_nm: Vec<f64>,
+    weights: Vec<[f64; 3]>,
+    /// The grid and rule of a uniform quadrature.
+    uniform: Option<(WavelengthGrid, Rule)>,
+}
+
+impl Quadrature {
+    /// Nodes and weights as given. Errors: no node, a node that is not a positive finite
+    /// wavelength or not above the one before it, a weight that is not finite, or weights under
+    /// which the observer sees nothing (`sum w_y <= 0`).
+    pub fn new(
+        kind: Kind,
+        observer: Observer,
+        nodes_nm: Vec<f64>,
+        weights: Vec<[f64; 3]>,
+    ) -> Result<Quadrature> {
+        if nodes_nm.is_empty() {
+            return Err(Error::invalid("a quadrature needs at least one wavelength"));
+        }
+        if nodes_nm.len() != weights.len() {
+            return Err(Error::invalid(format!(
+                "{} wavelengths but {} weight triples",
+                nodes_nm.len(),
+                weights.len()
+            )));
+        }
+        if let Some(bad) = nodes_nm.iter().find(|w| !(w.is_finite() && **w > 0.0)) {
+            return Err(Error::invalid(format!(
+                "quadrature node {bad} nm is not a positive wavelength"
+            )));
+        }
+        if let Some(i) = nodes_nm.windows(2).position(|p| p[1] <= p[0]) {
+            return Err(Error::invalid(format!(
+                "quadrature nodes must increase strictly: {} nm follows {} nm",
+                nodes_nm[i + 1],
+                nodes_nm[i]
+            )));
+        }
+        if let Some(i) = weights
+            .iter()
+            .position(|w| !w.iter().all(|v| v.is_finite()))
+        {
+            return Err(Error::invalid(format!(
+                "the weights of the node at {} nm are not finite: {:?}",
+                nodes_nm[i], weights[i]
+            )));
+        }
+        let q = Quadrature {
+            kind,
+            observer,
+            nodes_nm,
+            weights,
+            uniform: None,
+        };
+        if q.sum()[1].is_nan() || q.sum()[1] <= 0.0 {
+            return Err(Error::invalid(
+                "the quadrature's Y weights sum to nothing: the observer would see no light",
+            ));
+        }
+        Ok(q)
+    }
+
+    /// A uniform grid and an integration rule: `w_i = h_i cmf(lambda_i)`.
+    pub fn uniform(grid: WavelengthGrid, rule: Rule, observer: Observer) -> Result<Quadrature> {
+        let cmfs = Cmfs::new(observer, &grid)?;
+        let h = rule.weights(grid.len(), grid.step_nm());
+        let weights = (0..grid.len())
+            .map(|i| {
+                [
+                    h[i] * cmfs.x.values()[i],
+                    h[i] * cmfs.y.values()[i],
+                    h[i] * cmfs.z.values()[i],
+                ]
+            })
+            .collect();
+        let mut q = Quadrature::new(
+            Kind::Uniform,
+            observer,
+            grid.wavelengths_nm().collect(),
+            weights,
+        )
+        .map_err(|e| Error::invalid(format!("the grid {grid}: {e}")))?;
+        q.uniform = Some((grid, rule));
+        Ok(q)
+    }
+
+    /// Meyer's four-wavelength Gaussian quadrature ([`meyer`]).
+    pub fn meyer(observer: Observer) -> Result<Quadrature> {
+        meyer::meyer(observer)
+    }
+
+    pub fn kind(&self) -> Kind {
+        self.kind
+    }
+    pub fn observer(&self) -> Observer {
+        self.observer
+    }
+    pub fn nodes_nm(&self) -> &[f64] {
+        &self.nodes_nm
+    }
+    pub fn weights(&self) -> &[[f64; 3]] {
+        &self.weights
+    }
+    /// The grid and rule of a uniform quadrature.
+    pub fn uniform_grid(&self) -> Option<(WavelengthGrid, Rule)> {
+        self.uniform
+    }
+    /// Number of nodes (never zero).
+    pub fn len(&self) -> usize {
+        self.nodes_nm.len()
+    }
+    /// Always false: a quadrature has at least one node.
+    pub fn is_empty(&self) -> bool {
+        false
+    }
+
+    /// The sums of the weights: the integrals of the colour-matching functions themselves.
+    pub fn sum(&self) -> [f64; 3] {
+        self.integrate(&vec![1.0; self.len()])
+    }
+
+    /// `sum_i w_i v_i` for values at the nodes.
+    pub fn integrate(&self, values: &[f64]) -> [f64; 3] {
+        let mut s = [0.0; 3];
+        for (w, v) in self.weights.iter().zip(values) {
+            for c in 0..3 {
+                s[c] += w[c] * v;
+            }
+        }
+        s
+    }
+
+    /// XYZ of `stimulus` (values at the nodes) relative to `light` (the same): Y = 100 for a
+    /// perfect white under the light. None when the light has no luminance on the nodes.
+    pub fn relative_xyz(&self, stimulus: &[f64], light: &[f64]) -> Option<Xyz> {
+        let y = self.integrate(light)[1];
+        if !(y.is_finite() && y > 0.0) {
+            return None;
+        }
+        let [x, yy, z] = self.integrate(stimulus);
+        Some(Xyz::new(100.0 * x / y, 100.0 * yy / y, 100.0 * z / y))
+    }
+
+    /// A short description: `380:780:5 riemann` for a uniform grid, else the node count and
+    /// the wavelengths.
+    pub fn describe(&self) -> String {
+        match self.uniform {
+            Some((grid, rule)) => format!("{grid} {rule}"),
+            None => format!(
+                "{} {} nodes at {} nm",
+                self.kind,
+                self.len(),
+                self.nodes_nm
+                    .iter()
+                    .map(|w| crate::spectrum::fmt_num((w * 100.0).round() / 100.0))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        }
+    }
+
+    /// The summary `--json` reports.
+    pub fn summary(&self, estimate_de2000: Option<f64>) -> Summary {
+        Summary {
+            kind: self.kind,
+            nodes: self.len(),
+            nodes_nm: self.nodes_nm.clone(),
+            weights: self.weights.clone(),
+            grid: self.uniform.map(|(g, _)| g.to_string()),
+            rule: self.uniform.map(|(_, r)| r),
+            estimate_de2000,
+        }
+    }
+}
+
+impl fmt::Display for Quadrature {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.describe())
+    }
+}
+
+/// A quadrature as `--json` reports it.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Summary {
+    pub kind: Kind,
+    pub nodes: usize,
+    pub nodes_nm: Vec<f64>,
+    /// Per node: the x, y, z weights (`XYZ = sum_i w_i S(lambda_i)`, CMF units times nm).
+    pub weights: Vec<[f64; 3]>,
+    /// The grid and rule of a uniform quadrature.
+    pub grid: Option<String>,
+    pub rule: Option<Rule>,
+    /// The largest CIEDE2000 over the stimuli it was checked on, when it was.
+    pub estimate_de2000: Option<f64>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_uniform_grid_is_its_rule_times_the_cmfs() {
+        let grid = WavelengthGrid::new(380.0, 780.0, 5.0).unwrap();
+        let q = Quadrature::uniform(grid, Rule::Trapezoid, Observer::Cie1931).unwrap();
+        let cmfs = Cmfs::new(Observer::Cie1931, &grid).unwrap();
+        assert_eq!(q.len(), 81);
+        assert_eq!(q.nodes_nm()[1], 385.0);
+        // The sum of the y weights is the trapezoid integral of ybar (106.86 for CIE 1931).
+        let want = cmfs.y.integrate(Rule::Trapezoid);
+        assert!((q.sum()[1] - want).abs() < 1e-12 * want);
+        assert!((q.sum()[1] - 106.86).abs() < 0.05, "{}", q.sum()[1]);
+        assert_eq!(q.weights()[0][1], 2.5 * cmfs.y.values()[0]);
+        assert_eq!(q.describe(), "380:780:5 trapezoid");
+    }
+
+    #[test]
+    fn a_white_is_y_100_on_any_quadrature() {
+        let q = Quadrature::new(
+            Kind::Scene,
+            Observer::Cie1931,
+            vec![450.0, 550.0, 600.0],
+            vec![[1.0, 0.5, 3.0], [0.5, 2.0, 0.1], [2.0, 1.0, 0.0]],
+        )
+        .unwrap();
+        let light = [1.0, 2.0, 3.0];
+        let xyz = q.relative_xyz(&light, &light).unwrap();
+        assert!((xyz.y() - 100.0).abs() < 1e-12);
+        assert!(q.relative_xyz(&[1.0; 3], &[0.0; 3]).is_none());
+    }
+
+    #[test]
+    fn malformed_quadratures_are_errors() {
+        let o = Observer::Cie1931;
+        let w = vec![[1.0; 3]; 2];
+        for (nodes, weights) in [
+            (vec![], vec![]),
+            (vec![500.0, 500.0], w.clone()),
+            (vec![600.0, 500.0], w.clone()),
+            (vec![-5.0, 500.0], w.clone()),
+            (vec![f64::NAN, 500.0], w.clone()),
+            (vec![500.0], w.clone()),
+            (
+                vec![500.0, 600.0],
+                vec![[1.0, f64::INFINITY, 1.0], [1.0; 3]],
+            ),
+            (vec![500.0, 600.0], vec![[1.0, 0.0, 1.0]; 2]),
+        ] {
+            assert!(
+                Quadrature::new(Kind::Scene, o, nodes.clone(), weights).is_err(),
+                "{nodes:?}"
+            );
+        }
+    }
+}

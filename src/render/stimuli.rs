@@ -1,0 +1,346 @@
+//! What a scene shows, as stimuli for a quadrature ([`crate::quadrature`]): every spectrum its
+//! lights radiate, seen directly and through each object's pigment and film, at the angles and
+//! thicknesses the image holds, each at the brightest it appears.
+//!
+//! Per lighting, the spectra are those its coefficients expand with (`E` for a uniform or
+//! sky-and-ground environment and the sun; for a map also the three basis spectra `MCC_j * S`).
+//! Per object lit by it:
+//! - opaque: the diffuse path `k_d R_d T_f(theta)` and the specular path `R_f(theta)` (or `k_s`
+//!   without a film) of Eq. 1;
+//! - transparent: `R_f(theta)` in reflection and `T_f(theta)` in transmission (Eq. 9).
+//!
+//! Films are sampled at view angles from 0 to 89.5 degrees (and around the sun's highlight) and,
+//! on a thickness ramp, at [`SAMPLES_PER_CYCLE`] thicknesses per cycle of the round-trip phase at
+//! 380 nm. The fit set and the held-out set take different angles and thicknesses (the held-out
+//! ones lie between the fitted ones), so the held-out set checks what the fit did not see.
+//! Identical stimuli (objects that share a surface and a lighting) are taken once.
+//!
+//! The camera looks down -Z, so a surface seen at view angle `theta` has its normal `theta` from
+//! +Z and its mirror direction `2 theta` from it. Each stimulus's gain is the brightest the
+//! environment and the sun make it at its angle over the normals the shape has there (a sphere
+//! has every azimuth, a cylinder along X only normals in the YZ plane, a quad only +Z): the sun's
+//! `max(N.l, 0)` diffusely and its Phong lobe `(R_v.l)^n` in reflection.
+
+use super::{Environment, Lighting, Scene, Shape};
+use crate::error::Result;
+use crate::thinfilm::{Incidence, Layer, Stack};
+use crate::tradeoff::{Factor, Stimulus, Surface as Seen};
+use std::f64::consts::PI;
+
+/// View angles of the fit set (degrees).
+pub const FIT_ANGLES: [f64; 11] = [
+    0.0, 25.0, 40.0, 50.0, 58.0, 65.0, 71.0, 76.0, 81.0, 85.0, 89.5,
+];
+/// View angles of the held-out set, between the fitted ones.
+pub const HELD_OUT_ANGLES: [f64; 10] = [12.0, 33.0, 45.0, 54.0, 61.5, 68.0, 73.5, 78.5, 83.0, 87.5];
+/// Thickness samples per cycle of a ramp's round-trip phase at the shortest wavelength.
+pub const SAMPLES_PER_CYCLE: f64 = 12.0;
+
+/// Angles around the sun's highlight (offsets in degrees from it): fitted, and held out.
+const HIGHLIGHT_FIT: [f64; 5] = [-3.0, -1.5, 0.0, 1.5, 3.0];
+const HIGHLIGHT_HELD_OUT: [f64; 4] = [-2.25, -0.75, 0.75, 2.25];
+
+/// The fit set and the held-out set.
+#[derive(Debug, Clone)]
+pub struct Stimuli {
+    pub fit: Vec<Stimulus>,
+    pub held_out: Vec<Stimulus>,
+}
+
+/// A spectrum a lighting radiates: its normalising light, the basis reflectance it carries
+/// (None for `E`), and a label.
+struct Radiated {
+    label: String,
+    light: crate::spectrum::Tabulated,
+    tint: Option<crate::spectrum::Tabulated>,
+}
+
+fn radiated(l: &Lighting) -> Vec<Radiated> {
+    let mut out = Vec::new();
+    if matches!(l.environment, Environment::Map(_)) {
+        for (j, b) in l.basis_reflectance.iter().enumerate() {
+            out.push(Radiated {
+                label: format!("basis {} of {}", j + 1, l.label),
+                light: l.light.clone(),
+                tint: Some(b.clone()),
+            });
+        }
+    }
+    out.push(Radiated {
+        label: l.e_label.clone(),
+        light: l.e_spd.clone(),
+        tint: None,
+    });
+    out
+}
+
+/// The brightest the environment gets, in units of its spectra's whites.
+fn environment_peak(env: &Environment) -> f64 {
+    match env {
+        Environment::Uniform { radiance } => radiance.abs(),
+        Environment::SkyGround { sky, ground, .. } => sky.abs().max(ground.abs()),
+        Environment::Map(m) => m
+            .texels
+            .iter()
+            .map(|t| t.iter().map(|v| (*v as f64).abs()).sum::<f64>())
+            .fold(0.0, f64::max),
+    }
+}
+
+/// The thickness scales a film is sampled at: (fit, held out).
+fn thickness_scales(o: &super::Object) -> (Vec<f64>, Vec<f64>) {
+    let Some(r) = o.ramp else {
+        return (vec![1.0], vec![1.0]);
+    };
+    let optical: f64 = o.surface.film.as_ref().map_or(0.0, |f| {
+        f.layers
+            .iter()
+            .map(|l| l.material().index_at(550.0).map_or(1.0, |n| n.n()) * l.thickness_nm())
+            .sum()
+    });
+    let cycles = 2.0 * optical * (r.s1 - r.s0).abs() / 380.0;
+    let m = ((SAMPLES_PER_CYCLE * cycles).ceil() as usize).clamp(2, 400);
+    let at = |t: f64| r.s0 + (r.s1 - r.s0) * t;
+    let fit = (0..=m).map(|i| at(i as f64 / m as f64)).collect();
+    let held = (0..m).map(|i| at((i as f64 + 0.5) / m as f64)).collect();
+    (fit, held)
+}
+
+fn scaled_stack(f: &super::Film, k: f64) -> Result<Stack> {
+    let layers = f
+        .layers
+        .iter()
+        .map(|l| Layer::new(l.material().clone(), l.thickness_nm() * k))
+        .collect::<Result<Vec<_>>>()?;
+    Ok(Stack::new(f.ambient.clone(), layers, f.substrate.clone()))
+}
+
+/// How bright one lighting makes a surface at each view angle (see the module docs).
+#[derive(Debug, Clone, Copy)]
+struct Brightness {
+    /// The environment's peak, in units of its spectra's whites.
+    env: f64,
+    /// The sun's irradiance and unit direction.
+    sun: f64,
+    sun_dir: [f64; 3],
+}
+
+/// The normals of `shape` seen at view angle `deg` (the camera looks down -Z): for a sphere the
+/// two in the plane of the view and the sun (the extremes over all azimuths), for a cylinder
+/// along X the two in the YZ plane, for a quad facing +Z only its normal, at 0 degrees.
+fn normals(shape: &Shape, deg: f64, sun_dir: [f64; 3]) -> Vec<[f64; 3]> {
+    let (s, c) = deg.to_radians().sin_cos();
+    match shape {
+        Shape::Sphere { .. } => {
+            let h = sun_dir[0].hypot(sun_dir[1]);
+            let (x, y) = if h > 0.0 {
+                (sun_dir[0] / h, sun_dir[1] / h)
+            } else {
+                (1.0, 0.0)
+            };
+            vec![[s * x, s * y, c], [-s * x, -s * y, c]]
+        }
+        Shape::CylinderX { .. } => vec![[0.0, s, c], [0.0, -s, c]],
+        Shape::Quad { .. } => {
+            if deg == 0.0 {
+                vec![[0.0, 0.0, 1.0]]
+            } else {
+                Vec::new()
+            }
+        }
+    }
+}
+
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+impl Brightness {
+    fn of(l: &Lighting) -> Brightness {
+        let (sun, sun_dir) = l.sun.map_or((0.0, [0.0, 0.0, 1.0]), |s| {
+            let d = s.direction;
+            let len = dot(d, d).sqrt();
+            if len > 0.0 {
+                (s.irradiance.abs(), d.map(|v| v / len))
+            } else {
+                (0.0, [0.0, 0.0, 1.0])
+            }
+        });
+        Brightness {
+            env: environment_peak(&l.environment),
+            sun,
+            sun_dir,
+        }
+    }
+    /// The brightest diffuse lighting (times `kd`) of `shape` at view angle `deg`.
+    fn diffuse(&self, shape: &Shape, kd: f64, deg: f64) -> f64 {
+        let c = normals(shape, deg, self.sun_dir)
+            .iter()
+            .map(|n| dot(*n, self.sun_dir).max(0.0))
+            .fold(0.0, f64::max);
+        kd * (self.env + self.sun * c / PI)
+    }
+    /// The brightest specular lighting (environment plus the sun's Phong lobe).
+    fn specular(&self, shape: &Shape, shininess: f64, deg: f64) -> f64 {
+        let lobe = normals(shape, deg, self.sun_dir)
+            .iter()
+            .map(|n| {
+                let r = [
+                    2.0 * n[2] * n[0],
+                    2.0 * n[2] * n[1],
+                    2.0 * n[2] * n[2] - 1.0,
+                ];
+                super::cpu::lobe(dot(r, self.sun_dir), shininess)
+            })
+            .fold(0.0, f64::max);
+        self.env + self.sun * (shininess + 1.0) / (2.0 * PI) * lobe
+    }
+}
+
+/// The view angles sampled on `shape`: (fit, held out). Around the sun's highlight, if it
+/// reaches the shape, the angles are denser.
+fn angles(shape: &Shape, b: &Brightness, shininess: f64) -> (Vec<f64>, Vec<f64>) {
+    if matches!(shape, Shape::Quad { .. }) {
+        return (vec![0.0], Vec::new());
+    }
+    let (mut fit, mut held) = (FIT_ANGLES.to_vec(), HELD_OUT_ANGLES.to_vec());
+    let peak = (0..360)
+        .map(|i| i as f64 * 0.25)
+        .map(|d| (d, b.specular(shape, shininess, d) - b.env))
+        .fold((0.0, 0.0), |a, x| if x.1 > a.1 { x } else { a });
+    if peak.1 > 1e-3 * b.env.max(1e-9) {
+        fit.extend(HIGHLIGHT_FIT.iter().map(|d| peak.0 + d));
+        held.extend(HIGHLIGHT_HELD_OUT.iter().map(|d| peak.0 + d));
+    }
+    for v in [&mut fit, &mut held] {
+        v.retain(|a| (0.0..90.0).contains(a));
+        v.sort_by(f64::total_cmp);
+        v.dedup();
+    }
+    (fit, held)
+}
+
+impl Scene {
+    /// The scene's stimuli (see the module docs).
+    pub fn stimuli(&self) -> Result<Stimuli> {
+        let mut out = Stimuli {
+            fit: Vec::new(),
+            held_out: Vec::new(),
+        };
+        for (li, lighting) in self.lightings.iter().enumerate() {
+            let b = Brightness::of(lighting);
+            // Objects that look alike (same surface, same ramp) give the same stimuli.
+            let mut objects: Vec<&super::Object> = Vec::new();
+            for o in self.objects.iter().filter(|o| o.lighting == li) {
+                if !objects
+                    .iter()
+                    .any(|p| p.surface == o.surface && p.ramp == o.ramp)
+                {
+                    objects.push(o);
+                }
+            }
+            for r in radiated(lighting) {
+                let base: Vec<Factor> = r.tint.iter().cloned().map(Factor::Reflectance).collect();
+                let make = |name: String, mut f: Vec<Factor>, gain: f64| {
+                    let mut all = base.clone();
+                    all.append(&mut f);
+                    Stimulus::new(name, r.light.clone(), Seen::Product(all))
+                        .with_gain(gain.max(1e-3))
+                };
+                out.fit
+                    .push(make(r.label.clone(), Vec::new(), b.env.max(1.0)));
+                for o in &objects {
+                    object_stimuli(o, &r.label, &b, &make, &mut out)?;
+                }
+            }
+        }
+        Ok(out)
+    }
+}
+
+/// One object's stimuli under one radiated spectrum.
+fn object_stimuli(
+    o: &super::Object,
+    label: &str,
+    b: &Brightness,
+    make: &dyn Fn(String, Vec<Factor>, f64) -> Stimulus,
+    out: &mut Stimuli,
+) -> Result<()> {
+    let s = &o.surface;
+    let (fit_deg, held_deg) = angles(&o.shape, b, s.shininess);
+    let shape = &o.shape;
+    let pigment = s.diffuse.as_ref().filter(|_| s.kd > 0.0);
+    let Some(film) = &s.film else {
+        // No film: the pigment and the highlight do not change with the angle.
+        let brightest = |f: &dyn Fn(f64) -> f64| fit_deg.iter().map(|&d| f(d)).fold(0.0, f64::max);
+        if let Some(rd) = pigment {
+            let gain = brightest(&|d| b.diffuse(shape, s.kd, d));
+            let f = vec![Factor::Reflectance(rd.clone())];
+            out.fit
+                .push(make(format!("{} under {label}", s.label), f, gain));
+        }
+        if s.ks > 0.0 {
+            let gain = s.ks * brightest(&|d| b.specular(shape, s.shininess, d));
+            let name = format!("{} highlight under {label}", s.label);
+            out.fit.push(make(name, Vec::new(), gain));
+        }
+        return Ok(());
+    };
+    let (fit_k, held_k) = thickness_scales(o);
+    for (set, scales, angles) in [
+        (&mut out.fit, &fit_k, &fit_deg),
+        (&mut out.held_out, &held_k, &held_deg),
+    ] {
+        for &k in scales {
+            let stack = scaled_stack(film, k)?;
+            for &deg in angles {
+                let inc = Incidence::degrees(deg)?;
+                let what = |part: &str| {
+                    format!("{} film x{k:.3} {part} at {deg} deg under {label}", s.label)
+                };
+                let r = Factor::FilmReflectance(stack.clone(), inc);
+                let t = Factor::FilmTransmittance(stack.clone(), inc);
+                set.push(make(
+                    what("reflected"),
+                    vec![r],
+                    b.specular(shape, s.shininess, deg),
+                ));
+                if s.transparent {
+                    set.push(make(what("transmitted"), vec![t], b.env));
+                } else if let Some(rd) = pigment {
+                    let f = vec![Factor::Reflectance(rd.clone()), t];
+                    set.push(make(
+                        what("over its pigment"),
+                        f,
+                        b.diffuse(shape, s.kd, deg),
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+impl Scene {
+    /// `--tolerance`: the cheapest quadrature over the scene's stimuli in the output `space`
+    /// (see [`crate::quadrature::choose`]).
+    pub fn choose_quadrature(
+        &self,
+        observer: crate::colorimetry::Observer,
+        space: crate::colorimetry::RgbSpace,
+        family: crate::quadrature::choose::Family,
+        opts: &crate::quadrature::fit::Options,
+    ) -> Result<crate::quadrature::choose::Selection> {
+        use crate::quadrature::{choose, estimate::White};
+        let s = self.stimuli()?;
+        let scene = choose::Scene {
+            fit: &s.fit,
+            held_out: &s.held_out,
+            observer,
+            start_nm: 380.0,
+            end_nm: 780.0,
+            white: White::Fixed(space.xyz_from_rgb([1.0; 3])),
+        };
+        choose::select(&scene, family, opts)
+    }
+}
