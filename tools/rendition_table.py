@@ -35,9 +35,9 @@ RIGHT = {"interior_fl2": "FL2", "interior_fl11": "FL11", "street_hps": "hps",
 CONFIGS = [
     ("paper's method, right light", "--mode paper --light {light}"),
     ("exact, D65 carrier", "--mode exact --light D65"),
+    ("one light, right light", "--lights one --light {light}"),
+    ("one light, auto", "--lights one"),
     ("default", ""),
-    ("default, right light", "--light {light}"),
-    ("default, --light auto", "--light auto"),
 ]
 
 
@@ -72,7 +72,7 @@ def main():
             name, _, flags = argv.pop(0).partition("=")
             configs = [c for c in configs if c[0] != name] + [(name, flags)]
         elif a == "--only":
-            keep = argv.pop(0).split(",")
+            keep = argv.pop(0).split(";") if ";" in argv[0] else argv.pop(0).split(",")
             configs = [c for c in configs if c[0] in keep]
         else:
             args.append(a)

@@ -18,7 +18,7 @@ use std::path::PathBuf;
 #[derive(Debug, Args)]
 #[command(after_help = "\
 Layouts: latlong (2:1), cube (OpenEXR's N x 6N), hcross (4:3), vcross (3:4), hstrip (6:1),
-vstrip (1:6) and faces (six files); see the README's layout table for each face's orientation.
+vstrip (1:6) and faces (six files); see docs/conversion.md's layout table for each face's orientation.
 
 Examples:
   specmap convert envmaps/sunrise.exr -o sunrise.spectral.exr --light auto
