@@ -6,7 +6,7 @@
 For each scene of tests/data/truth/manifest.json and each configuration: `specmap convert
 <scene>.rgb.exr -o X.exr <flags> --quiet --json`, then `specmap rendition <scene>.spectral.exr
 X.exr --json`. `--config NAME=FLAGS` adds (or replaces) a column (NAME without `=`); `--only
-NAME,...` keeps only those columns. Each cell: mean / max rendition CIEDE2000 / mean white CIEDE2000 (over the normals
+NAME,...` (or NAME;NAME;... when a name holds a comma) keeps only those columns. Each cell: mean / max rendition CIEDE2000 / mean white CIEDE2000 (over the normals
 up, +x, -x, +z, -z). `{light}` in a configuration's flags is the scene's right light (D65 for the
 skies, FL2, FL11, hps). The binary: $SPECMAP_BIN, else $CARGO_TARGET_DIR/debug/specmap, else
 target/debug/specmap. Only the standard library is needed.
