@@ -173,7 +173,6 @@ pub(crate) struct Basis3 {
     pub(crate) rgb: Matrix3<f64>,
     /// rgb^-1: coefficients of a (true) RGB.
     pub(crate) inv: Matrix3<f64>,
-    pub(crate) peak: [f64; 3],
 }
 
 impl Basis3 {
@@ -184,15 +183,11 @@ impl Basis3 {
             return None;
         }
         let inv = rgb.try_inverse()?;
-        let peak = spectra
-            .each_ref()
-            .map(|s| s.values().iter().fold(0f64, |m, v| m.max(v.abs())));
         Some(Basis3 {
             spectra: spectra.map(|s| s.values().iter().map(|&v| v as f32).collect()),
             y,
             rgb,
             inv,
-            peak,
         })
     }
 
@@ -203,10 +198,6 @@ impl Basis3 {
 
     pub(crate) fn luminance(&self, a: &Vector3<f64>) -> f64 {
         (0..3).map(|j| a[j] * self.y[j]).sum()
-    }
-
-    pub(crate) fn bound(&self, a: &Vector3<f64>) -> f64 {
-        (0..3).map(|j| a[j].abs() * self.peak[j]).sum()
     }
 }
 
@@ -220,16 +211,12 @@ pub struct Engine {
     basis: [Vec<f32>; 3],
     /// Luminance of each basis spectrum.
     basis_y: [f64; 3],
-    /// Largest absolute value of each basis spectrum (for [`Engine::bound`]).
-    basis_peak: [f64; 3],
     /// Linear RGB of each basis spectrum (columns).
     basis_rgb: Matrix3<f64>,
     /// The main light's RGB at Y = 1: the white balance the paper's premise implies.
     light_rgb: Vector3<f64>,
     /// The sun's SPD at Y = 1 and its RGB (true, D65-referenced).
     sun: Option<(Vec<f32>, Vector3<f64>)>,
-    /// Largest absolute value of the sun's SPD.
-    sun_peak: f64,
     /// The CIE daylight basis (when sky pixels take it).
     daylight: Option<Basis3>,
     /// The main light times (1, x, x^2) (when the model is smooth and the light can carry it).
@@ -429,17 +416,14 @@ impl Engine {
                 Some((s, d.rgb * a))
             }
         };
-        let peak = |b: &[f32]| b.iter().fold(0f32, |m, &v| m.max(v.abs())) as f64;
         Ok(Engine {
             grid,
             upsampler: Upsampler::new(fit, &space),
             model,
-            basis_peak: basis.each_ref().map(|b| peak(b)),
             basis,
             basis_y,
             basis_rgb,
             light_rgb,
-            sun_peak: sun.as_ref().map_or(0.0, |(s, _)| peak(s)),
             sun,
             daylight: if model.sky_daylight && is_daylight {
                 daylight
@@ -564,40 +548,6 @@ impl Engine {
         } else {
             [a[0], a[1], a[2], 0.0]
         }
-    }
-
-    /// The ColorChecker coefficients' upper bounds (see [`Upsampler::coefficient_bound`]): the
-    /// exact coefficients' magnitudes but for `nonneg` pixels outside the cone, which are not
-    /// searched.
-    fn colorchecker_bound(&self, rgb: [f32; 3]) -> [f64; 3] {
-        self.upsampler.coefficient_bound(self.balanced(rgb))
-    }
-
-    /// An upper bound of the largest magnitude among a pixel's `coefficients` (the `basis`
-    /// format's values), without the `nonneg` search.
-    pub fn coefficient_bound(&self, rgb: [f32; 3], is_sun: bool) -> f64 {
-        let a = self.colorchecker_bound(rgb);
-        if is_sun && self.sun.is_some() {
-            (0..3).map(|j| a[j] * self.basis_y[j].abs()).sum()
-        } else {
-            a.iter().fold(0f64, |m, &v| m.max(v))
-        }
-    }
-
-    /// An upper bound of the absolute values the pixel's spectrum takes (without the `nonneg`
-    /// search).
-    pub fn bound(&self, rgb: [f32; 3], kind: PixelKind) -> f64 {
-        let is_sun = kind == PixelKind::Sun;
-        if is_sun && self.sun.is_some() {
-            return self.coefficient_bound(rgb, true) * self.sun_peak;
-        }
-        let a = self.colorchecker_bound(rgb);
-        let mut bound: f64 = (0..3).map(|j| a[j] * self.basis_peak[j]).sum();
-        let r = self.true_rgb(rgb);
-        for b in [&self.daylight, &self.smooth].into_iter().flatten() {
-            bound = bound.max(b.bound(&(b.inv * r)));
-        }
-        bound
     }
 
     /// Writes the pixel's spectral radiance into `out` (one value per output wavelength) and
@@ -958,38 +908,5 @@ mod tests {
         // And a difference just above it is measured.
         let back = [1.0 + 1e-6, 1.0, 1.0];
         assert!(e.round_trip_error([1.0, 1.0, 1.0], back) > 0.0);
-    }
-
-    #[test]
-    fn the_bound_holds_for_every_mode_without_searching() {
-        // The half-float EV scale comes from `bound`, which skips the nonneg search: it must
-        // still bound what `spectrum` writes, sun pixels included.
-        for mode in [Mode::Paper, Mode::Exact, Mode::Nonneg] {
-            let e = engine("FL2", mode, "380:780:5", true);
-            let mut out = vec![0f32; e.grid().len()];
-            for rgb in [
-                [1.0, 0.0, 0.0],
-                [0.0, 0.2, 3.0],
-                [5e4, 2e4, 1.0],
-                [0.5, 0.5, 0.5],
-            ] {
-                for kind in [PixelKind::Plain, PixelKind::Sky, PixelKind::Sun] {
-                    e.spectrum(rgb, kind, &mut out);
-                    let peak = out.iter().fold(0f64, |m, &v| m.max(v.abs() as f64));
-                    let bound = e.bound(rgb, kind);
-                    assert!(
-                        peak <= bound * (1.0 + 1e-6),
-                        "{mode:?} {rgb:?} {kind:?}: {peak} > {bound}"
-                    );
-                    let c = e.coefficients(rgb, kind == PixelKind::Sun);
-                    let cmax = c.iter().fold(0f64, |m, v| m.max(v.abs()));
-                    let cb = e.coefficient_bound(rgb, kind == PixelKind::Sun);
-                    assert!(
-                        cmax <= cb * (1.0 + 1e-12),
-                        "{mode:?} {rgb:?}: {cmax} > {cb}"
-                    );
-                }
-            }
-        }
     }
 }
