@@ -144,7 +144,15 @@ def test_truth_rgb_is_its_spectra_seen_by_the_cie_1931_observer(scene):
     ybar_sum = CMFS.copy().align(colour.SpectralShape(380, 780, 5)).values[:, 1].sum()
     xyz = spectra.reshape(-1, len(wl)) @ CMFS.copy().align(shape).values / ybar_sum
     srgb = colour.RGB_COLOURSPACES["sRGB"]  # its matrix from the primaries, not the rounded one
-    rgb = xyz @ np.linalg.inv(colour.normalised_primary_matrix(srgb.primaries, srgb.whitepoint)).T
+    to_rgb = np.linalg.inv(colour.normalised_primary_matrix(srgb.primaries, srgb.whitepoint))
+    rgb = xyz @ to_rgb.T
+    if "balance" in scene:
+        # White-balanced to a lamp: its RGB (at luminance 1) divided out.
+        table = np.loadtxt(ROOT / "spectra" / "light" / f"{scene['balance']}.csv", delimiter=",",
+                           skiprows=1)
+        lamp = np.interp(wl, table[:, 0], table[:, 1])
+        lamp_xyz = lamp @ CMFS.copy().align(shape).values
+        rgb = rgb / (to_rgb @ (lamp_xyz / lamp_xyz[1]))
     with OpenEXR.File(str(TRUTH / scene["rgb"]), separate_channels=True) as f:
         channels = f.channels()
         user = np.stack([channels[c].pixels for c in "RGB"], -1).astype(np.float64)
