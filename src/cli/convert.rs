@@ -457,12 +457,18 @@ pub fn run(a: ConvertArgs) -> anyhow::Result<()> {
     outln!(out, "  output       {}", output_text(r));
     outln!(
         out,
-        "  round trip   CIEDE2000 energy-weighted mean {:.4}, max {:.4}; without the sun: mean \
-         {:.4}, max {:.4}",
-        r.roundtrip.weighted_mean_de2000,
-        r.roundtrip.max_de2000,
-        r.roundtrip_without_sun.weighted_mean_de2000,
-        r.roundtrip_without_sun.max_de2000
+        "  round trip   over {}",
+        super::floor_text(&r.roundtrip_floor)
+    );
+    outln!(
+        out,
+        "    all        {}",
+        super::round_trip_text(&r.roundtrip)
+    );
+    outln!(
+        out,
+        "    no sun     {}",
+        super::round_trip_text(&r.roundtrip_without_sun)
     );
     outln!(
         out,
@@ -530,14 +536,11 @@ fn write_spectra(out: &mut String, r: &convert::ConvertReport) {
         sp.nearest,
         sp.negative
     );
-    if r.inexact.pixels > 0 {
+    if r.inexact.pixels + r.inexact.below_floor.pixels > 0 {
         outln!(
             out,
-            "  inexact      {} pixels could not keep their colour: CIEDE2000 energy-weighted mean \
-             {:.3}, max {:.3}",
-            r.inexact.pixels,
-            r.inexact.weighted_mean_de2000,
-            r.inexact.max_de2000
+            "  inexact      could not keep their colour: {}",
+            super::round_trip_text(&r.inexact)
         );
     }
 }

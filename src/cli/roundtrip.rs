@@ -111,16 +111,13 @@ pub fn run(a: RoundtripArgs) -> anyhow::Result<()> {
             .map(|t| format!(", white-balanced by the main light's RGB {t:.4?}"))
             .unwrap_or_default()
     );
+    outln!(
+        out,
+        "  statistic        over {}",
+        super::floor_text(&r.floor)
+    );
     for (name, s) in [("all pixels", &r.all), ("without the sun", &r.without_sun)] {
-        outln!(
-            out,
-            "  {name:<16} {} pixels: CIEDE2000 energy-weighted mean {:.4}, max {:.4} at ({}, {})",
-            s.pixels,
-            s.weighted_mean_de2000,
-            s.max_de2000,
-            s.max_at[0],
-            s.max_at[1]
-        );
+        outln!(out, "  {name:<16} {}", super::round_trip_text(s));
     }
     outln!(out, "  sun pixels       {}", r.sun_pixels);
     if r.non_finite_pixels > 0 {

@@ -12,9 +12,10 @@ use crate::envmap::input::{self, Sanitized};
 use crate::envmap::layout::{EnvMap, Layout, Orientation};
 use crate::envmap::light::{LightChoice, WhiteChoice};
 use crate::envmap::plan::{self, Analysis, PixelPlan, Plan};
+use crate::envmap::roundtrip_stats::{Floor, RoundTripStats};
 use crate::envmap::scene::{Light, ReflectorModel, Scene};
 use crate::envmap::sun::SunSettings;
-use crate::envmap::write::{self, FileSettings, RoundTripStats, SpectraCount};
+use crate::envmap::write::{self, FileSettings, SpectraCount};
 use crate::error::{Error, Result};
 use crate::fit::{self, Fit, Mode};
 use crate::spectrum::{Rule, WavelengthGrid};
@@ -300,7 +301,8 @@ pub struct ConvertReport {
     pub bright_reflectors: Vec<String>,
     pub spectra: SpectraCount,
     /// The round trip over the pixels whose spectrum could not reproduce their colour (the
-    /// nearest non-negative spectra, clipped lamp pixels; the sun aside).
+    /// nearest non-negative spectra, clipped lamp pixels, the paper mode's pixels but white; the
+    /// sun aside).
     pub inexact: RoundTripStats,
     /// What the conversion could not do as asked, in words.
     pub notes: Vec<String>,
@@ -310,7 +312,10 @@ pub struct ConvertReport {
     pub wavelengths_nm: Vec<f64>,
     pub channels: usize,
     pub bytes: u64,
-    /// Over all pixels, and over those not replaced by the sun's SPD.
+    /// The luminance floor of the round-trip statistics (see [`Floor`]).
+    pub roundtrip_floor: Floor,
+    /// Over all pixels, and over those not replaced by the sun's SPD (see
+    /// [`crate::envmap::roundtrip_stats`]: the statistic `specmap roundtrip` reports).
     pub roundtrip: RoundTripStats,
     pub roundtrip_without_sun: RoundTripStats,
     pub seconds_read: f64,
@@ -464,6 +469,7 @@ pub fn convert(
         wavelengths_nm: plan.grid.wavelengths_nm().collect(),
         channels: written.channels,
         bytes: written.bytes,
+        roundtrip_floor: written.roundtrip_floor,
         roundtrip: written.roundtrip,
         roundtrip_without_sun: written.roundtrip_without_sun,
         seconds_read: read.seconds,

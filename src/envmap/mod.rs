@@ -12,6 +12,7 @@ pub mod light;
 pub mod metric;
 pub mod plan;
 pub mod roundtrip;
+pub mod roundtrip_stats;
 pub mod scene;
 pub mod sun;
 pub mod write;

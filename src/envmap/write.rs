@@ -11,8 +11,10 @@ use crate::envmap::exrio::{
 use crate::envmap::layout::{EnvMap, Layout};
 use crate::envmap::metric::RgbMetric;
 use crate::envmap::plan::{PixelPlan, Plan};
+use crate::envmap::roundtrip_stats::{Floor, RoundTripAccumulator, RoundTripStats};
 use crate::envmap::scene::Cells;
 use crate::error::Result;
+use crate::fit::Mode;
 use rayon::prelude::*;
 use std::path::Path;
 use std::time::Instant;
@@ -66,56 +68,13 @@ impl SpectraCount {
     }
 }
 
-/// RGB -> SPD -> RGB over a set of written pixels.
-#[derive(Debug, Clone, Copy, Default, serde::Serialize)]
-pub struct RoundTripStats {
-    /// Energy-weighted (luminance x solid angle) mean CIEDE2000.
-    pub weighted_mean_de2000: f64,
-    pub max_de2000: f64,
-    pub pixels: usize,
-}
-
-#[derive(Debug, Clone, Copy, Default)]
-struct Accumulator {
-    weighted: f64,
-    weight: f64,
-    max: f64,
-    pixels: usize,
-}
-
-impl Accumulator {
-    fn add(&mut self, de: f64, w: f64) {
-        self.weighted += de * w;
-        self.weight += w;
-        self.max = self.max.max(de);
-        self.pixels += 1;
-    }
-    fn merge(&mut self, o: &Accumulator) {
-        self.weighted += o.weighted;
-        self.weight += o.weight;
-        self.max = self.max.max(o.max);
-        self.pixels += o.pixels;
-    }
-    fn stats(&self) -> RoundTripStats {
-        RoundTripStats {
-            weighted_mean_de2000: if self.weight > 0.0 {
-                self.weighted / self.weight
-            } else {
-                0.0
-            },
-            max_de2000: self.max,
-            pixels: self.pixels,
-        }
-    }
-}
-
 /// The round trip over all pixels, without the sun, and over the pixels that could not be
-/// exact (the nearest non-negative spectra, clipped lamp pixels).
-#[derive(Debug, Clone, Copy, Default)]
+/// exact (the nearest non-negative spectra, clipped lamp pixels, the paper modes' inexact ones).
+#[derive(Debug, Clone, Default)]
 struct Tally {
-    all: Accumulator,
-    no_sun: Accumulator,
-    inexact: Accumulator,
+    all: RoundTripAccumulator,
+    no_sun: RoundTripAccumulator,
+    inexact: RoundTripAccumulator,
     count: SpectraCount,
 }
 
@@ -136,6 +95,22 @@ struct Pixels<'a> {
 }
 
 impl Pixels<'_> {
+    /// What a written pixel took and whether its round trip is exact. The carriers say so
+    /// themselves; the paper's basis is exact in its exact mode, for white only in the paper
+    /// mode, and where the spectrum stays non-negative in the nonneg mode, whose other pixels
+    /// get the nearest non-negative spectrum: so its pixels are exact when their round trip is.
+    fn exactness(&self, w: Written, de: f64) -> (Took, bool) {
+        match &self.plan.pixels {
+            PixelPlan::Carriers { .. } => (w.took, w.exact),
+            PixelPlan::Basis { .. } => {
+                let exact = de == 0.0;
+                let nearest =
+                    !exact && w.took == Took::Colorchecker && self.plan.fit.mode == Mode::Nonneg;
+                (if nearest { Took::Nearest } else { w.took }, exact)
+            }
+        }
+    }
+
     fn metric(&self) -> &RgbMetric {
         match &self.plan.pixels {
             PixelPlan::Basis { engine, .. } => engine.metric(),
@@ -267,6 +242,8 @@ pub struct WriteStats {
     pub channels: usize,
     pub bytes: u64,
     pub spectra: SpectraCount,
+    /// The luminance floor of the round-trip statistics (the map's).
+    pub roundtrip_floor: Floor,
     pub roundtrip: RoundTripStats,
     pub roundtrip_without_sun: RoundTripStats,
     /// Over the pixels whose spectrum could not reproduce their RGB.
@@ -342,70 +319,76 @@ pub fn write(
     while y0 < height {
         let rows = rows_per_block.min(height - y0);
         let buf = &mut buffer[..rows * width * per_pixel];
-        let row_tallies: Vec<Tally> = buf
+        let batch = buf
             .par_chunks_mut(width * per_pixel)
             .enumerate()
-            .map(|(r, row)| write_row(&px, y0 + r, row, per_pixel))
-            .collect();
-        for t in row_tallies {
-            tally.merge(&t);
-        }
+            .fold(Tally::default, |mut t, (r, row)| {
+                write_row(&px, y0 + r, row, per_pixel, &mut t);
+                t
+            })
+            .reduce(Tally::default, |mut a, b| {
+                a.merge(&b);
+                a
+            });
+        tally.merge(&batch);
         writer.write_rows(y0, buf)?;
         y0 += rows;
         progress(y0, height);
     }
     let seconds_encode = writer.encode_seconds();
     let bytes = writer.finish()?;
+    let floor = tally.all.floor();
     Ok(WriteStats {
         channels: per_pixel,
         bytes,
         spectra: tally.count,
-        roundtrip: tally.all.stats(),
-        roundtrip_without_sun: tally.no_sun.stats(),
-        roundtrip_inexact: tally.inexact.stats(),
+        roundtrip_floor: floor,
+        roundtrip: tally.all.stats(&floor),
+        roundtrip_without_sun: tally.no_sun.stats(&floor),
+        roundtrip_inexact: tally.inexact.stats(&floor),
         seconds: t1.elapsed().as_secs_f64(),
         seconds_encode,
     })
 }
 
-/// One row of the output: each pixel's values, and what it took.
-fn write_row(px: &Pixels, y: usize, row: &mut [f32], per_pixel: usize) -> Tally {
+/// One row of the output: each pixel's values, and what it took, added to `t`.
+fn write_row(px: &Pixels, y: usize, row: &mut [f32], per_pixel: usize, t: &mut Tally) {
     let width = px.map.image.width;
     let bands = px.plan.grid.len();
-    let mut t = Tally::default();
     // The basis format writes coefficients; the round trip still needs the spectrum.
     let mut scratch = vec![0f32; bands];
     let metric = px.metric();
     for x in 0..width {
         let rgb = px.map.image.get(x, y);
         let out = &mut row[x * per_pixel..(x + 1) * per_pixel];
-        let (w, is_sun) = match px.plan.format {
+        let (w, is_sun, negative) = match px.plan.format {
             OutputFormat::Spectral => {
                 let (spectrum, rest) = out.split_at_mut(bands);
-                let r = px.spectrum(x, y, spectrum, &mut [0f32; 4]);
+                let (w, is_sun) = px.spectrum(x, y, spectrum, &mut [0f32; 4]);
                 rest[..3].copy_from_slice(&rgb);
-                rest[3] = r.1 as u8 as f32;
-                t.count.add(r.0.took, carriers::is_negative(spectrum));
-                r
+                rest[3] = is_sun as u8 as f32;
+                (w, is_sun, carriers::is_negative(spectrum))
             }
             OutputFormat::Basis => {
-                let r = px.spectrum(x, y, &mut scratch, out);
-                t.count.add(r.0.took, carriers::is_negative(&scratch));
-                r
+                let (w, is_sun) = px.spectrum(x, y, &mut scratch, out);
+                (w, is_sun, carriers::is_negative(&scratch))
             }
         };
-        let omega = px.map.solid_angle(x, y);
         let lum = metric.luminance(rgb);
-        if lum > 0.0 && omega > 0.0 {
-            let de = metric.round_trip_error(rgb, w.rgb_back);
-            t.all.add(de, lum * omega);
-            if !is_sun {
-                t.no_sun.add(de, lum * omega);
-            }
-            if !w.exact && !is_sun {
-                t.inexact.add(de, lum * omega);
+        let de = if lum > 0.0 {
+            metric.round_trip_error(rgb, w.rgb_back)
+        } else {
+            0.0
+        };
+        let (took, exact) = px.exactness(w, de);
+        t.count.add(took, negative);
+        let omega = px.map.solid_angle(x, y);
+        t.all.add(x, y, lum, omega, de);
+        if !is_sun {
+            t.no_sun.add(x, y, lum, omega, de);
+            if !exact {
+                t.inexact.add(x, y, lum, omega, de);
             }
         }
     }
-    t
 }

@@ -99,9 +99,29 @@ def test_sunrise_sun_pixels_carry_d65_when_asked(specmap, tmp_path):
         np.testing.assert_allclose(ratio, ratio.mean(), rtol=1e-5)
 
 
+def latlong_solid_angles(height, width):
+    """Solid angle of each pixel of a lat-long map (bands between two latitudes)."""
+    t = np.pi * np.arange(height + 1) / height
+    band = 2 * np.pi / width * (np.cos(t[:-1]) - np.cos(t[1:]))
+    return np.repeat(band[:, None], width, 1)
+
+
+def floor_of(lum, omega):
+    """The statistic's luminance floor, recomputed: 2^-13 of the 99th-percentile luminance by
+    solid angle, the percentile rounded down to 1/16 octave (see src/envmap/roundtrip_stats.rs)."""
+    order = np.argsort(lum, kind="stable")
+    cum = np.cumsum(omega[order])
+    p99 = lum[order][np.searchsorted(cum, 0.99 * cum[-1])]
+    if p99 <= 0:
+        return 0.0
+    return 2.0 ** (np.floor(np.log2(p99) * 16) / 16 - 13)
+
+
 def test_roundtrip_command_agrees_with_colour_science(specmap, tmp_path):
-    """`specmap roundtrip` on a half-precision file: its statistics, recomputed in Python."""
-    out = convert(tmp_path, "forest")
+    """`specmap roundtrip` on a half-precision file: its statistics (mean, maximum and where it
+    is, over the pixels at or above the luminance floor), recomputed in Python; and `convert`
+    reports the same floor and maximum pixel for the same map."""
+    out, report = convert(tmp_path, "forest", report=True)
     r = specmap("roundtrip", str(out))
     header, channels, preview = read_openexr(out)
     _, image = colour.io.read_spectral_image_Fichet2021(str(out))["S0"]
@@ -111,9 +131,26 @@ def test_roundtrip_command_agrees_with_colour_science(specmap, tmp_path):
     cs = colour.RGB_COLOURSPACES["sRGB"]
     m = colour.normalised_primary_matrix(cs.primaries, cs.whitepoint)
     y = want @ m[1]
-    lit = y > 0
+    omega = latlong_solid_angles(*preview.shape[:2]).reshape(-1)
+    floor = floor_of(y, omega)
+    assert r["floor"]["luminance"] == pytest.approx(floor, rel=1e-12)
+    assert report["roundtrip_floor"]["luminance"] == pytest.approx(floor, rel=1e-3)
+    lit = y >= floor
     white = colour.XYZ_to_xy(m @ np.ones(3))
     lab = lambda rgb: colour.XYZ_to_Lab((rgb / y[lit, None]) @ m.T, white)
     de = colour.delta_E(lab(want[lit]), lab(back[lit]), method="CIE 2000")
+    w = y[lit] * omega[lit]
     assert r["all"]["pixels"] == lit.sum()
     assert r["all"]["max_de2000"] == pytest.approx(de.max(), rel=1e-3, abs=1e-4)
+    assert r["all"]["weighted_mean_de2000"] == pytest.approx((de * w).sum() / w.sum(),
+                                                             rel=1e-3, abs=1e-5)
+    i = np.flatnonzero(lit)[np.argmax(de)]
+    assert r["all"]["max_at"] == [int(i % preview.shape[1]), int(i // preview.shape[1])]
+    assert r["all"]["max_luminance"] == pytest.approx(y[i], rel=1e-6)
+    below = (y > 0) & ~lit
+    assert r["all"]["below_floor"]["pixels"] == below.sum()
+    assert r["all"]["black_pixels"] == (y <= 0).sum()
+    # The conversion measured its spectra before half-float rounding: the same pixel is the
+    # worst, by nearly the same amount.
+    assert report["roundtrip"]["max_at"] == r["all"]["max_at"]
+    assert report["roundtrip"]["max_de2000"] == pytest.approx(r["all"]["max_de2000"], abs=0.01)
