@@ -49,7 +49,8 @@ pub struct ConvertArgs {
     #[arg(long, value_enum, default_value_t = ReflectorsArg::Local)]
     reflectors: ReflectorsArg,
     /// What RGB (1,1,1) is: `light` (the map is white-balanced to its main light, the paper's
-    /// premise), `d65` (D65-referenced: a sodium lamp looks orange), or `auto` (the brightest
+    /// premise), `space` (the RGB space's own white, unadapted: D65 for sRGB, ACES white for
+    /// ACEScg; a sodium lamp looks orange; `d65` is an old name of it), or `auto` (the brightest
     /// regions decide). Default: auto, except `light` for paper/exact/nonneg with a named light.
     #[arg(long, value_enum)]
     white: Option<WhiteArg>,
@@ -63,9 +64,11 @@ pub struct ConvertArgs {
     /// How RGB becomes a spectrum.
     #[arg(long, value_enum, default_value_t = ConvertModeArg::Faithful)]
     mode: ConvertModeArg,
-    /// RGB space of the input.
-    #[arg(long, value_enum, default_value_t = SpaceArg::Srgb)]
-    space: SpaceArg,
+    /// RGB space of the input [default: the one the file's OpenEXR `chromaticities` attribute
+    /// declares, else srgb (OpenEXR's Rec.709 with D65)]. Given, it overrides the file's, with a
+    /// note when they differ.
+    #[arg(long, value_enum)]
+    space: Option<SpaceArg>,
     /// Find the sun and give its pixels their own SPD.
     #[arg(long, value_enum, default_value_t = SunArg::Auto)]
     sun: SunArg,
@@ -169,7 +172,8 @@ enum ConvertModeArg {
 #[derive(Debug, Clone, Copy, ValueEnum)]
 enum WhiteArg {
     Light,
-    D65,
+    #[value(alias = "d65")]
+    Space,
     Auto,
 }
 
@@ -272,10 +276,10 @@ pub fn run(a: ConvertArgs) -> anyhow::Result<()> {
             ReflectorsArg::Local => ReflectorModel::Local,
             ReflectorsArg::Global => ReflectorModel::Global,
         },
-        space: fit
-            .as_ref()
-            .map(|f| f.rgb_space())
-            .unwrap_or(a.space.into()),
+        space: a
+            .space
+            .map_or(specmap::colorimetry::RgbSpace::SRGB, Into::into),
+        space_overrides_file: a.space.is_some(),
         fit,
         mode: match a.mode {
             ConvertModeArg::Paper => specmap::fit::Mode::Paper,
@@ -288,7 +292,7 @@ pub fn run(a: ConvertArgs) -> anyhow::Result<()> {
         },
         white: a.white.map(|w| match w {
             WhiteArg::Light => WhiteSpec::Light,
-            WhiteArg::D65 => WhiteSpec::D65,
+            WhiteArg::Space => WhiteSpec::Space,
             WhiteArg::Auto => WhiteSpec::Auto,
         }),
         sky: a.sky.map(|s| match s {
@@ -424,13 +428,14 @@ pub fn run(a: ConvertArgs) -> anyhow::Result<()> {
             r.sanitized.negative_kept
         );
     }
+    outln!(out, "  space        {}", space_text(&r.space));
     write_lights(&mut out, r);
     outln!(
         out,
         "  white        RGB (1,1,1) is {} ({})",
         match r.white.premise {
-            WhitePremise::Light => "the main light",
-            WhitePremise::D65 => "D65 white",
+            WhitePremise::Light => "the main light".to_string(),
+            WhitePremise::Space => format!("the space's white, {}, unadapted", r.space.white),
         },
         r.white.reason
     );
@@ -543,6 +548,17 @@ fn write_spectra(out: &mut String, r: &convert::ConvertReport) {
             super::round_trip_text(&r.inexact)
         );
     }
+}
+
+/// The space line of the report: the space, its primaries and white, and where it comes from.
+fn space_text(s: &specmap::envmap::input::SpaceChoice) -> String {
+    use specmap::envmap::input::SpaceSource;
+    let from = match s.source {
+        SpaceSource::File => "declared by the file's chromaticities",
+        SpaceSource::Given => "as asked",
+        SpaceSource::Default => "the file declares none: OpenEXR's Rec.709 primaries with D65",
+    };
+    format!("{} ({}; {from})", s.name, s.chromaticities)
 }
 
 /// The sun line of the report: where it is, how much energy, the SPD it was given.

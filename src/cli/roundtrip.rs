@@ -99,7 +99,7 @@ pub fn run(a: RoundtripArgs) -> anyhow::Result<()> {
     let mut out = String::new();
     outln!(
         out,
-        "{}: {}x{}, {} wavelengths {}..{} nm, {}{}",
+        "{}: {}x{}, {} wavelengths {}..{} nm, {} ({}){}",
         r.file,
         r.width,
         r.height,
@@ -107,6 +107,7 @@ pub fn run(a: RoundtripArgs) -> anyhow::Result<()> {
         r.range_nm[0],
         r.range_nm[1],
         r.space,
+        r.chromaticities,
         r.white_balance
             .map(|t| format!(", white-balanced by the main light's RGB {t:.4?}"))
             .unwrap_or_default()

@@ -1,7 +1,7 @@
 //! `roundtrip`: re-read a spectral OpenEXR, integrate its spectra back to RGB and compare them
 //! with the file's own R, G, B preview (the original pixels), pixel by pixel, streaming.
 
-use crate::colorimetry::{Observer, RgbSpace};
+use crate::colorimetry::{Chromaticities, Observer, RgbSpace};
 use crate::envmap::exrio::{read_spectral_rows, AttrValue, EnvmapAttr};
 use crate::envmap::layout::{detect, EnvMap, Layout};
 use crate::envmap::metric::RgbMetric;
@@ -20,7 +20,9 @@ pub struct FileRoundTrip {
     pub layout: Option<Layout>,
     pub wavelengths: usize,
     pub range_nm: [f64; 2],
+    /// The space of the R, G, B channels (its `chromaticities`, else `specmap.space`).
     pub space: String,
+    pub chromaticities: Chromaticities,
     /// The main light's RGB the spectra were divided by (the paper's white balance), from the
     /// `specmap.lightRGB` attribute; None for files without it.
     pub white_balance: Option<[f64; 3]>,
@@ -34,6 +36,23 @@ pub struct FileRoundTrip {
     /// Pixels left out because a band or an R, G, B value is NaN or infinite (or their
     /// integral overflows).
     pub non_finite_pixels: usize,
+}
+
+/// The space of a file's R, G, B: its `chromaticities` (the space `specmap.space` names when it
+/// has them: sRGB and the paper's sRGB share them), else the named one, else sRGB (OpenEXR's
+/// Rec.709 with D65).
+fn preview_space(
+    path: &Path,
+    named: Option<RgbSpace>,
+    declared: Option<Chromaticities>,
+) -> Result<RgbSpace> {
+    Ok(match (named, declared) {
+        (Some(n), Some(c)) if n.chromaticities().same_as(&c) => n,
+        (_, Some(c)) => RgbSpace::from_chromaticities(c)
+            .map_err(|e| Error::invalid(format!("{}: {e}", path.display())))?,
+        (Some(n), None) => n,
+        (None, None) => RgbSpace::SRGB,
+    })
 }
 
 /// Reads the single float channel `name` of the first part, if the file has it.
@@ -119,14 +138,12 @@ pub fn round_trip_file(
         }
     };
     let y_norm: f64 = yb.iter().zip(&weights).map(|(y, w)| y * w).sum();
-    let mut info_space = RgbSpace::SRGB;
+    let mut named = None;
     let mut white_balance = None;
     for (name, value) in &header.attributes {
         match (name.as_str(), value) {
             ("specmap.space", AttrValue::Text(t)) => {
-                if let Some(s) = RgbSpace::ALL.into_iter().find(|s| s.name == *t) {
-                    info_space = s;
-                }
+                named = RgbSpace::ALL.into_iter().find(|s| s.name == *t);
             }
             ("specmap.lightRGB", AttrValue::F32Vec(v)) if v.len() == 3 => {
                 white_balance = Some([v[0] as f64, v[1] as f64, v[2] as f64]);
@@ -134,7 +151,7 @@ pub fn round_trip_file(
             _ => {}
         }
     }
-    let space = info_space;
+    let space = preview_space(path, named, header.chromaticities)?;
     let m = space.from_xyz_matrix();
     let metric = RgbMetric::new(&space);
     let envmap = header.envmap.map(|e| match e {
@@ -217,6 +234,7 @@ pub fn round_trip_file(
         wavelengths: bands,
         range_nm: [wavelengths[0], wavelengths[bands - 1]],
         space: space.name.to_string(),
+        chromaticities: space.chromaticities(),
         white_balance,
         floor,
         all: all.stats(&floor),
