@@ -536,7 +536,7 @@ fn write_spectra(out: &mut String, r: &convert::ConvertReport) {
         sp.daylight,
         sp.smooth,
         sp.colorchecker,
-        sp.nonneg,
+        sp.nonneg_fallback,
         sp.clipped,
         sp.nearest,
         sp.negative

@@ -33,8 +33,10 @@ pub struct SpectraCount {
     pub smooth: usize,
     /// Carrier x ColorChecker basis.
     pub colorchecker: usize,
-    /// Carrier x non-negative Bernstein combination (exact).
-    pub nonneg: usize,
+    /// Carrier x non-negative Bernstein combination (exact): the faithful method's fallback where
+    /// the smooth modulation and the ColorChecker basis go negative. Not the paper's `nonneg`
+    /// mode, whose pixels count as `colorchecker` where exact and `nearest` where not.
+    pub nonneg_fallback: usize,
     /// The nearest non-negative spectrum (the colour is not one its light can make).
     pub nearest: usize,
     /// Clipped lamp pixels given their lamp's SPD.
@@ -50,7 +52,7 @@ impl SpectraCount {
             Took::Daylight => self.daylight += 1,
             Took::Smooth => self.smooth += 1,
             Took::Colorchecker => self.colorchecker += 1,
-            Took::Nonneg => self.nonneg += 1,
+            Took::Nonneg => self.nonneg_fallback += 1,
             Took::Nearest => self.nearest += 1,
             Took::Fixed => self.clipped += 1,
         }
@@ -61,7 +63,7 @@ impl SpectraCount {
         self.daylight += o.daylight;
         self.smooth += o.smooth;
         self.colorchecker += o.colorchecker;
-        self.nonneg += o.nonneg;
+        self.nonneg_fallback += o.nonneg_fallback;
         self.nearest += o.nearest;
         self.clipped += o.clipped;
         self.negative += o.negative;
