@@ -215,3 +215,68 @@ fn chromaticities_that_make_no_space_or_disagree_between_faces_are_refused() {
         "{err}"
     );
 }
+
+/// Display P3's primaries and D65, and its XYZ -> RGB matrix (SMPTE EG 432-1, D65 white, as
+/// colour-science gives it); sRGB's RGB -> XYZ (IEC 61966-2-1).
+const P3: [f32; 8] = [0.680, 0.320, 0.265, 0.690, 0.150, 0.060, 0.3127, 0.3290];
+const P3_FROM_XYZ: [[f64; 3]; 3] = [
+    [2.4934969, -0.9313836, -0.4027108],
+    [-0.8294890, 1.7626641, 0.0236247],
+    [0.0358458, -0.0761724, 0.9568845],
+];
+const XYZ_FROM_SRGB: [[f64; 3]; 3] = [
+    [0.4124, 0.3576, 0.1805],
+    [0.2126, 0.7152, 0.0722],
+    [0.0193, 0.1192, 0.9505],
+];
+
+fn mul(m: &[[f64; 3]; 3], v: [f64; 3]) -> [f64; 3] {
+    std::array::from_fn(|r| (0..3).map(|c| m[r][c] * v[c]).sum())
+}
+
+#[test]
+fn render_reads_an_rgb_environment_in_its_declared_space() {
+    // The same colours written as sRGB (no chromaticities) and as Display P3 (declared; the
+    // same white, so the renderer's light premise maps both whites alike): the same light, so
+    // the same render.
+    let d = tempfile::tempdir().unwrap();
+    let srgb = |x: usize, y: usize| -> [f64; 3] {
+        let t = (x as f64 / 63.0, y as f64 / 31.0);
+        [0.2 + 0.6 * t.0, 0.5, 0.2 + 0.6 * t.1].map(|v| v * if y < 8 { 4.0 } else { 1.0 })
+    };
+    let (a, b) = (d.path().join("srgb.exr"), d.path().join("p3.exr"));
+    write_map(&a, None, |x, y| srgb(x, y).map(|v| v as f32));
+    write_map(&b, Some(P3), |x, y| {
+        mul(&P3_FROM_XYZ, mul(&XYZ_FROM_SRGB, srgb(x, y))).map(|v| v as f32)
+    });
+    let render = |env: &Path, out: &str| {
+        let out = d.path().join(out);
+        let r = specmap(&[
+            "render",
+            "--scene",
+            "ball",
+            "--backend",
+            "cpu",
+            "--size",
+            "32x32",
+            "--env",
+            env.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+        specmap::envmap::exrio::read_rgb(&out, None)
+            .unwrap()
+            .image
+            .pixels
+    };
+    let (pa, pb) = (render(&a, "a.exr"), render(&b, "b.exr"));
+    let peak = pa.iter().flatten().fold(0f32, |m, v| m.max(v.abs()));
+    let worst = pa
+        .iter()
+        .flatten()
+        .zip(pb.iter().flatten())
+        .fold(0f32, |m, (x, y)| m.max((x - y).abs()));
+    // The published sRGB matrix has 4 decimals: 1e-4 of the colours.
+    assert!(worst < 2e-3 * peak, "{worst} of {peak}");
+}
