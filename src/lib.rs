@@ -11,6 +11,7 @@
 //! - [`tradeoff`]: colour error against time for wavelength grids and rules; `--tolerance`;
 //! - [`plot`], [`io`]: PNG/SVG plots and safe (temporary file + rename) output.
 
+pub mod batch;
 pub mod colorimetry;
 pub mod data;
 pub mod envmap;

@@ -470,3 +470,32 @@ fn sigterm_removes_the_temporary_file_and_exits_143() {
 fn sighup_removes_the_temporary_file_and_exits_129() {
     interrupted("-HUP", 129);
 }
+
+/// One behaviour for every command: the folder of an output file is never created; a missing
+/// one is refused before any work, named (a folder output such as `demo -o` creates itself).
+#[test]
+fn a_missing_output_folder_is_refused_by_every_command() {
+    let d = tempfile::tempdir().unwrap();
+    let map = d.path().join("in.exr");
+    rgb_exr(&map, 16, 8);
+    let missing = d.path().join("new").join("folder");
+    let file = |name: &str| missing.join(name).display().to_string();
+    let (exr, png, json) = (file("x.exr"), file("x.png"), file("x.json"));
+    let truth = repo("tests/data/truth/sky_e45_t4.spectral.exr");
+    for args in [
+        &["convert", s(&map), "-o", &exr][..],
+        &["fit", "--light", "D65", "-o", &json],
+        &["data", "show", "D65", "--plot", &png],
+        &["thinfilm", "--substrate", "1.45", "--plot", &png],
+        &["render", "--backend", "cpu", "--size", "8x8", "-o", &png],
+        &["roundtrip", &truth, "--heatmap", &png],
+    ] {
+        let err = fails(args);
+        assert!(
+            err.contains(&format!("the folder {} does not exist", missing.display())),
+            "{args:?}: {err}"
+        );
+        assert_eq!(err.lines().count(), 1, "{args:?}: {err}");
+    }
+    assert_eq!(listing(d.path()), ["in.exr"]);
+}

@@ -8,14 +8,17 @@
    work) against numpy + colour-science + OpenEXR doing the same: read, clamp, fit the exact-mode
    matrix, expand every pixel to 81 bands, write half/ZIP. The two outputs are checked to hold the
    same channels and values. Wall-clock seconds, best of 3; specmap on all cores and on one
-   (RAYON_NUM_THREADS=1), and with --zip-level 1; the share of each run spent encoding the EXR.
-2. With --big: an 8192x4096 input (sunrise upsampled 8x, half, ZIP) converted by specmap under
+   (RAYON_NUM_THREADS=1), and with --zip-level 1.
+2. The compressions, on sunrise: ZIP, ZIPS, PIZ and none, specmap and OpenEXR's Python binding
+   writing the same spectra: seconds (best of 3) and file size.
+3. With --big: an 8192x4096 input (sunrise upsampled 8x, half, ZIP) converted by specmap under
    /usr/bin/time: peak resident memory and throughput.
 """
 import json
 import os
 import pathlib
 import re
+import resource
 import subprocess
 import sys
 import tempfile
@@ -29,11 +32,15 @@ import colour
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 BIN = pathlib.Path(os.environ.get("CARGO_TARGET_DIR", ROOT / "target")) / "release" / "specmap"
 SHAPE = colour.SpectralShape(380, 780, 5)
-ARGS = ["--range", "380:780:5", "--precision", "half", "--compression", "zip", "--sun", "off",
+ARGS = ["--range", "380:780:5", "--precision", "half", "--sun", "off",
         "--mode", "exact", "--light", "D65", "--quiet"]
 
 
-def python_convert(src, dst):
+COMPRESSIONS = {"zip": OpenEXR.ZIP_COMPRESSION, "zips": OpenEXR.ZIPS_COMPRESSION,
+                "piz": OpenEXR.PIZ_COMPRESSION, "none": OpenEXR.NO_COMPRESSION}
+
+
+def python_convert(src, dst, compression="zip"):
     with OpenEXR.File(str(src), separate_channels=True) as f:
         ch = f.channels()
         rgb = np.stack([ch[c].pixels.astype(np.float32) for c in "RGB"], -1)
@@ -58,7 +65,7 @@ def python_convert(src, dst):
     for i, name in enumerate("RGB"):
         channels[name] = np.ascontiguousarray(rgb[..., i]).astype(np.float16)
     channels["sun"] = np.zeros((h, wd), np.float16)        # specmap writes the (empty) sun mask
-    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    header = {"compression": COMPRESSIONS[compression], "type": OpenEXR.scanlineimage}
     t0 = time.perf_counter()
     with OpenEXR.File(header, channels) as f:
         f.write(str(dst))
@@ -79,27 +86,40 @@ def same_output(ours, theirs):
             assert np.allclose(x, y, rtol=2e-3, atol=1e-3 * y.max()), (c, np.abs(x - y).max())
 
 
+def cpu_seconds():
+    """CPU seconds (user + system) of this process and its finished children, all threads."""
+    me, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime
+
+
 def best_of(n, f):
-    """The fastest of n runs of f: (seconds, f's result in that run)."""
+    """The fastest of n runs of f: (seconds, f's result in that run); CPU_USED holds that run's
+    CPU seconds (which a machine shared with other work inflates far less than wall time)."""
+    global CPU_USED
     runs = []
     for _ in range(n):
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), cpu_seconds()
         r = f()
-        runs.append((time.perf_counter() - t0, r))
-    return min(runs, key=lambda t: t[0])
+        runs.append((time.perf_counter() - t0, r, cpu_seconds() - c0))
+    wall, r, CPU_USED = min(runs, key=lambda t: t[0])
+    return wall, r
+
+
+CPU_USED = 0.0
 
 
 def specmap(src, dst, *extra, threads=None):
-    """Runs specmap convert; returns its seconds spent encoding the EXR (from --json)."""
+    """Runs specmap convert (its report, from --json)."""
     env = dict(os.environ, **({"RAYON_NUM_THREADS": str(threads)} if threads else {}))
     p = subprocess.run([BIN, "convert", src, "-o", dst, *ARGS, *extra, "--json"], check=True,
                        capture_output=True, text=True, env=env)
-    return json.loads(p.stdout)["seconds_encode"]
+    return json.loads(p.stdout)
 
 
 def main():
     subprocess.run(["cargo", "build", "--release", "-q"], cwd=ROOT, check=True)
     cores = os.cpu_count()
+    mpix = 1024 * 512 / 1e6
     with tempfile.TemporaryDirectory() as tmp:
         tmp = pathlib.Path(tmp)
         print(f"| input | specmap, {cores} threads | specmap, 1 thread | specmap, --zip-level 1 "
@@ -107,21 +127,38 @@ def main():
         print("|---|---:|---:|---:|---:|---:|---:|")
         for name in ("sunrise", "forest"):
             src = ROOT / "envmaps" / f"{name}.exr"
-            ours, enc = best_of(3, lambda: specmap(src, tmp / "ours.exr"))
+            ours, _ = best_of(3, lambda: specmap(src, tmp / "ours.exr"))
+            ours_cpu = CPU_USED
             size = (tmp / "ours.exr").stat().st_size
-            one, enc1 = best_of(3, lambda: specmap(src, tmp / "one.exr", threads=1))
+            one, _ = best_of(3, lambda: specmap(src, tmp / "one.exr", threads=1))
             fast, _ = best_of(3, lambda: specmap(src, tmp / "fast.exr", "--zip-level", "1"))
             fast_size = (tmp / "fast.exr").stat().st_size
             theirs, write = best_of(3, lambda: python_convert(src, tmp / "theirs.exr"))
+            their_cpu = CPU_USED
             their_size = (tmp / "theirs.exr").stat().st_size
             same_output(tmp / "ours.exr", tmp / "theirs.exr")
             same_output(tmp / "fast.exr", tmp / "theirs.exr")
-            mpix = 1024 * 512 / 1e6
-            print(f"| {name}.exr 1024x512 | {ours:.2f} s ({mpix / ours:.2f} Mpix/s; EXR encoding "
-                  f"{enc / ours:.0%}; {size / 1e6:.1f} MB) | {one:.2f} s (encoding {enc1 / one:.0%}) "
+            print(f"| {name}.exr 1024x512 | {ours:.2f} s ({mpix / ours:.2f} Mpix/s; "
+                  f"{size / 1e6:.1f} MB; CPU {ours_cpu:.2f} s) | {one:.2f} s "
                   f"| {fast:.2f} s ({fast_size / 1e6:.1f} MB) | {theirs:.2f} s ({mpix / theirs:.2f} "
-                  f"Mpix/s; OpenEXR write {write / theirs:.0%}; {their_size / 1e6:.1f} MB) "
+                  f"Mpix/s; OpenEXR write {write / theirs:.0%}; {their_size / 1e6:.1f} MB; CPU "
+                  f"{their_cpu:.2f} s) "
                   f"| {theirs / ours:.1f}x | {theirs / one:.1f}x |")
+        print(f"\n| sunrise.exr, compression | specmap, {cores} threads | OpenEXR's Python binding "
+              "(whole Python conversion; its write alone) | ratio |")
+        print("|---|---:|---:|---:|")
+        src = ROOT / "envmaps" / "sunrise.exr"
+        for c in COMPRESSIONS:
+            ours, _ = best_of(3, lambda: specmap(src, tmp / "ours.exr", "--compression", c))
+            ours_cpu = CPU_USED
+            size = (tmp / "ours.exr").stat().st_size
+            theirs, write = best_of(3, lambda: python_convert(src, tmp / "theirs.exr", c))
+            their_cpu = CPU_USED
+            their_size = (tmp / "theirs.exr").stat().st_size
+            same_output(tmp / "ours.exr", tmp / "theirs.exr")
+            print(f"| {c.upper()} | {ours:.2f} s ({mpix / ours:.2f} Mpix/s; CPU {ours_cpu:.2f} s), "
+                  f"{size / 1e6:.1f} MB | {theirs:.2f} s (write {write:.2f} s; CPU "
+                  f"{their_cpu:.2f} s), {their_size / 1e6:.1f} MB | {theirs / ours:.1f}x |")
         if "--big" in sys.argv:
             with OpenEXR.File(str(ROOT / "envmaps" / "sunrise.exr"), separate_channels=True) as f:
                 ch = f.channels()

@@ -200,14 +200,21 @@ def write_exr(path, channels, attrs):
 
 
 def write_scene(out, name, wl, radiance, params):
-    """Rounds the spectra to half, derives the RGB from the rounded spectra, writes both files."""
+    """Rounds the spectra to half, derives the RGB from the rounded spectra, writes both files.
+    With `balance` in params (a table of spectra/light), the RGB map is white-balanced to that
+    light: its RGB divided out, so that the light is (1, 1, 1)."""
     radiance = np.asarray(radiance, np.float64)
     if not np.isfinite(radiance).all() or radiance.min() < 0:
         raise SystemExit(f"{name}: non-finite or negative radiance")
     if radiance.max() >= 65504:
         raise SystemExit(f"{name}: radiance {radiance.max()} does not fit in half")
     half = radiance.astype(np.float16)
-    rgb = rgb_of(half.astype(np.float64), wl).astype(np.float32)
+    rgb = rgb_of(half.astype(np.float64), wl)
+    if "balance" in params:
+        white = light("light", params["balance"], wl)
+        white_rgb = rgb_of(white, wl) / xyz_of(white, wl)[1]
+        rgb = rgb / white_rgb
+    rgb = rgb.astype(np.float32)
     text = {f"truth.{k}": str(v) for k, v in params.items()}
     spectral = {channel_name(nm): np.ascontiguousarray(half[..., i]) for i, nm in enumerate(wl)}
     for i, c in enumerate("RGB"):
@@ -464,6 +471,8 @@ def street_scene():
 
 
 def main():
+    import truth_mixed  # noqa: F401  (the multi-light scenes; it imports this module's helpers)
+    globals()["truth_mixed"] = truth_mixed
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--out", type=pathlib.Path, default=ROOT / "tests" / "data" / "truth")
     ap.add_argument("--only", nargs="*", help="scene names to (re)generate")
@@ -471,6 +480,7 @@ def main():
     args.out.mkdir(parents=True, exist_ok=True)
     names = [f"sky_e{e:02d}_t{t}" for e in SKY_ELEVATIONS for t in SKY_TURBIDITIES]
     names += ["interior_fl2", "interior_fl11", "street_hps"]
+    names += list(truth_mixed.SCENES)
     wanted = args.only or names
     unknown = set(wanted) - set(names)
     if unknown:
@@ -492,6 +502,8 @@ def main():
             wl, radiance, params = sky_scene(mi, dr, e, t)
         elif name.startswith("interior_"):
             wl, radiance, params = interior_scene(name.split("_")[1].upper())
+        elif name in truth_mixed.SCENES:
+            wl, radiance, params = truth_mixed.SCENES[name]()
         else:
             wl, radiance, params = street_scene()
         manifest[name] = write_scene(args.out, name, wl, radiance, params)

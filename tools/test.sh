@@ -21,6 +21,18 @@ if ! dpkg -s mesa-vulkan-drivers libvulkan1 >/dev/null 2>&1; then
     exit 1
   fi
 fi
+step "GNU parallel for the batch shard test (Debian package parallel)"
+# tests/batch.rs runs two shards of one batch at once under GNU parallel, as the README's recipe.
+if ! command -v parallel >/dev/null 2>&1; then
+  if [ "$(id -u)" = 0 ]; then
+    export DEBIAN_FRONTEND=noninteractive
+    apt-get install -y -qq parallel >/dev/null 2>&1 \
+      || { apt-get update -qq && apt-get install -y -qq parallel >/dev/null; }
+  else
+    echo "GNU parallel missing and not root: install the Debian package parallel" >&2
+    exit 1
+  fi
+fi
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp/specmap-xdg-$(id -u)}"
 mkdir -p "$XDG_RUNTIME_DIR" && chmod 700 "$XDG_RUNTIME_DIR"
 # The GPU tests must run here, not skip: a missing adapter is a failure in this suite.

@@ -34,6 +34,19 @@ pub struct ConvertArgs {
     /// Output OpenEXR (written to a temporary file, then renamed).
     #[arg(short, long, value_name = "OUT.exr")]
     output: PathBuf,
+    #[command(flatten)]
+    options: ConvertOptionArgs,
+    /// Print nothing but errors: no progress bar, no summary (with --json, the JSON only).
+    #[arg(long)]
+    quiet: bool,
+    /// Machine-readable summary.
+    #[arg(long)]
+    json: bool,
+}
+
+/// The flags that say how a map is converted (shared by `convert`, `inspect` and `batch`).
+#[derive(Debug, Args)]
+pub struct ConvertOptionArgs {
     /// `auto` (the default): every light the scene holds, found and classified (sun, sky,
     /// windows, lamps of their families); a table name or CSV: the spectrum of the lamps (the
     /// sun, sky and windows keep daylight), or with --lights one of every non-sun pixel.
@@ -127,12 +140,6 @@ pub struct ConvertArgs {
     /// NaN and infinite pixels are an error (default: set to 0 and counted).
     #[arg(long)]
     strict: bool,
-    /// Print nothing but errors: no progress bar, no summary (with --json, the JSON only).
-    #[arg(long)]
-    quiet: bool,
-    /// Machine-readable summary.
-    #[arg(long)]
-    json: bool,
 }
 
 /// The largest `--size`: a lat-long height or a cube face (the renderer's limit too).
@@ -233,130 +240,149 @@ enum CompressionArg {
     B44a,
 }
 
-pub fn run(a: ConvertArgs) -> anyhow::Result<()> {
-    if !a.rotation.is_finite() {
-        anyhow::bail!(
-            "--rotation {}: the angle must be a finite number of degrees",
-            a.rotation
-        );
+impl ConvertOptionArgs {
+    /// The input is six face files named by a `{face}` pattern.
+    pub fn faces(&self) -> bool {
+        matches!(self.in_layout, InLayout::Faces)
     }
-    if let Some(n) = a.size {
-        if n > MAX_SIZE {
+
+    /// The `--fit` file, an input of the command.
+    pub fn fit_file(&self) -> Option<&std::path::Path> {
+        self.fit.as_deref()
+    }
+
+    /// The flags checked and turned into the library's options (a `--fit` file is loaded).
+    pub fn to_options(&self) -> anyhow::Result<ConvertOptions> {
+        let a = self;
+        if !a.rotation.is_finite() {
             anyhow::bail!(
+                "--rotation {}: the angle must be a finite number of degrees",
+                a.rotation
+            );
+        }
+        if let Some(n) = a.size {
+            if n > MAX_SIZE {
+                anyhow::bail!(
                 "--size {n}: at most {MAX_SIZE} (a {0}x{MAX_SIZE} lat-long or {MAX_SIZE}-pixel cube \
                  faces already hold billions of values)",
                 2 * MAX_SIZE
             );
+            }
         }
-    }
-    let fit = match &a.fit {
-        Some(p) => Some(Fit::load(p)?),
-        None => None,
-    };
-    let in_layout = match a.in_layout {
-        InLayout::Auto | InLayout::Faces => None,
-        InLayout::Latlong => Some(Layout::LatLong),
-        InLayout::Cube => Some(Layout::Cube),
-        InLayout::Hcross => Some(Layout::HCross),
-        InLayout::Vcross => Some(Layout::VCross),
-        InLayout::Hstrip => Some(Layout::HStrip),
-        InLayout::Vstrip => Some(Layout::VStrip),
-    };
-    let opts = ConvertOptions {
-        light: if a.light.eq_ignore_ascii_case("auto") {
-            LightSpec::Auto
-        } else {
-            LightSpec::Named(a.light.clone())
-        },
-        lights: match a.lights {
-            LightsArg::All => Lights::All,
-            LightsArg::One => Lights::One,
-        },
-        reflectors: match a.reflectors {
-            ReflectorsArg::Local => ReflectorModel::Local,
-            ReflectorsArg::Global => ReflectorModel::Global,
-        },
-        space: a
-            .space
-            .map_or(specmap::colorimetry::RgbSpace::SRGB, Into::into),
-        space_overrides_file: a.space.is_some(),
-        fit,
-        mode: match a.mode {
-            ConvertModeArg::Paper => specmap::fit::Mode::Paper,
-            ConvertModeArg::Nonneg => specmap::fit::Mode::Nonneg,
-            ConvertModeArg::Faithful | ConvertModeArg::Exact => specmap::fit::Mode::Exact,
-        },
-        method: match a.mode {
-            ConvertModeArg::Faithful => Method::Faithful,
-            _ => Method::Basis,
-        },
-        white: a.white.map(|w| match w {
-            WhiteArg::Light => WhiteSpec::Light,
-            WhiteArg::Space => WhiteSpec::Space,
-            WhiteArg::Auto => WhiteSpec::Auto,
-        }),
-        sky: a.sky.map(|s| match s {
-            SkyArg::Daylight => SkySpd::Daylight,
-            SkyArg::Light => SkySpd::Light,
-        }),
-        sun: match a.sun {
-            SunArg::Auto => Some(SunSettings::default()),
-            SunArg::Off => None,
-        },
-        sun_spd: a
-            .sun_spd
-            .as_ref()
-            .map(|s| match s.to_ascii_lowercase().as_str() {
-                "d65" => SunSpd::D65,
-                "match" => SunSpd::Match,
-                "daylight" => SunSpd::Daylight,
-                _ => SunSpd::Light(s.clone()),
-            }),
-        in_layout,
-        faces: matches!(a.in_layout, InLayout::Faces),
-        layer: a.layer.clone(),
-        out_layout: match a.out_layout {
-            OutLayout::Same => None,
-            OutLayout::Latlong => Some(Layout::LatLong),
-            OutLayout::Cube => Some(Layout::Cube),
-        },
-        size: a.size,
-        orientation: Orientation {
-            up: match a.up {
-                UpArg::Y => Up::Y,
-                UpArg::Z => Up::Z,
+        let fit = match &a.fit {
+            Some(p) => Some(Fit::load(p)?),
+            None => None,
+        };
+        let in_layout = match a.in_layout {
+            InLayout::Auto | InLayout::Faces => None,
+            InLayout::Latlong => Some(Layout::LatLong),
+            InLayout::Cube => Some(Layout::Cube),
+            InLayout::Hcross => Some(Layout::HCross),
+            InLayout::Vcross => Some(Layout::VCross),
+            InLayout::Hstrip => Some(Layout::HStrip),
+            InLayout::Vstrip => Some(Layout::VStrip),
+        };
+        let opts = ConvertOptions {
+            light: if a.light.eq_ignore_ascii_case("auto") {
+                LightSpec::Auto
+            } else {
+                LightSpec::Named(a.light.clone())
             },
-            rotation_deg: a.rotation,
-        },
-        grid: a.range,
-        format: match a.format {
-            FormatArg::Spectral => OutputFormat::Spectral,
-            FormatArg::Basis => OutputFormat::Basis,
-        },
-        precision: match a.precision {
-            PrecisionArg::Half => Precision::Half,
-            PrecisionArg::Float => Precision::Float,
-        },
-        compression: match a.compression {
-            CompressionArg::None => Compression::None,
-            CompressionArg::Rle => Compression::Rle,
-            CompressionArg::Zip => Compression::Zip,
-            CompressionArg::Zips => Compression::Zips,
-            CompressionArg::Piz => Compression::Piz,
-            CompressionArg::Pxr24 => Compression::Pxr24,
-            CompressionArg::B44 => Compression::B44,
-            CompressionArg::B44a => Compression::B44a,
-        },
-        zip_level: a.zip_level,
-        strict: a.strict,
-        tolerance: a.tolerance,
-        ..ConvertOptions::default()
-    };
+            lights: match a.lights {
+                LightsArg::All => Lights::All,
+                LightsArg::One => Lights::One,
+            },
+            reflectors: match a.reflectors {
+                ReflectorsArg::Local => ReflectorModel::Local,
+                ReflectorsArg::Global => ReflectorModel::Global,
+            },
+            space: a
+                .space
+                .map_or(specmap::colorimetry::RgbSpace::SRGB, Into::into),
+            space_overrides_file: a.space.is_some(),
+            fit,
+            mode: match a.mode {
+                ConvertModeArg::Paper => specmap::fit::Mode::Paper,
+                ConvertModeArg::Nonneg => specmap::fit::Mode::Nonneg,
+                ConvertModeArg::Faithful | ConvertModeArg::Exact => specmap::fit::Mode::Exact,
+            },
+            method: match a.mode {
+                ConvertModeArg::Faithful => Method::Faithful,
+                _ => Method::Basis,
+            },
+            white: a.white.map(|w| match w {
+                WhiteArg::Light => WhiteSpec::Light,
+                WhiteArg::Space => WhiteSpec::Space,
+                WhiteArg::Auto => WhiteSpec::Auto,
+            }),
+            sky: a.sky.map(|s| match s {
+                SkyArg::Daylight => SkySpd::Daylight,
+                SkyArg::Light => SkySpd::Light,
+            }),
+            sun: match a.sun {
+                SunArg::Auto => Some(SunSettings::default()),
+                SunArg::Off => None,
+            },
+            sun_spd: a
+                .sun_spd
+                .as_ref()
+                .map(|s| match s.to_ascii_lowercase().as_str() {
+                    "d65" => SunSpd::D65,
+                    "match" => SunSpd::Match,
+                    "daylight" => SunSpd::Daylight,
+                    _ => SunSpd::Light(s.clone()),
+                }),
+            in_layout,
+            faces: matches!(a.in_layout, InLayout::Faces),
+            layer: a.layer.clone(),
+            out_layout: match a.out_layout {
+                OutLayout::Same => None,
+                OutLayout::Latlong => Some(Layout::LatLong),
+                OutLayout::Cube => Some(Layout::Cube),
+            },
+            size: a.size,
+            orientation: Orientation {
+                up: match a.up {
+                    UpArg::Y => Up::Y,
+                    UpArg::Z => Up::Z,
+                },
+                rotation_deg: a.rotation,
+            },
+            grid: a.range,
+            format: match a.format {
+                FormatArg::Spectral => OutputFormat::Spectral,
+                FormatArg::Basis => OutputFormat::Basis,
+            },
+            precision: match a.precision {
+                PrecisionArg::Half => Precision::Half,
+                PrecisionArg::Float => Precision::Float,
+            },
+            compression: match a.compression {
+                CompressionArg::None => Compression::None,
+                CompressionArg::Rle => Compression::Rle,
+                CompressionArg::Zip => Compression::Zip,
+                CompressionArg::Zips => Compression::Zips,
+                CompressionArg::Piz => Compression::Piz,
+                CompressionArg::Pxr24 => Compression::Pxr24,
+                CompressionArg::B44 => Compression::B44,
+                CompressionArg::B44a => Compression::B44a,
+            },
+            zip_level: a.zip_level,
+            strict: a.strict,
+            tolerance: a.tolerance,
+            ..ConvertOptions::default()
+        };
+        Ok(opts)
+    }
+}
+
+pub fn run(a: ConvertArgs) -> anyhow::Result<()> {
+    let opts = a.options.to_options()?;
     let mut guard = super::guard::Guard::new();
     for file in convert::input_files(&a.input, &opts) {
         guard.input("", file);
     }
-    if let Some(p) = &a.fit {
+    if let Some(p) = a.options.fit_file() {
         guard.input("--fit", p);
     }
     guard.output("-o", &a.output).check()?;
@@ -369,10 +395,6 @@ pub fn run(a: ConvertArgs) -> anyhow::Result<()> {
             "-o {}: convert writes OpenEXR; name the output .exr",
             a.output.display()
         );
-    }
-    if let Some(dir) = a.output.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir)
-            .with_context(|| format!("creating the output folder {}", dir.display()))?;
     }
     let bar = (!a.quiet && std::io::stderr().is_terminal()).then(|| {
         let b = indicatif::ProgressBar::new(0);
@@ -490,7 +512,23 @@ pub fn run(a: ConvertArgs) -> anyhow::Result<()> {
 
 /// The lights lines of the report: each light of the scene, or the main light.
 fn write_lights(out: &mut String, r: &convert::ConvertReport) {
-    for l in &r.lights {
+    light_lines(out, &r.lights, &r.bright_reflectors);
+    match &r.light_choice {
+        Some(c) => outln!(out, "  main light   {} (auto: {})", r.light, c.reason),
+        None if r.lights_mode == Lights::One || r.mode != "faithful" => {
+            outln!(out, "  main light   {}", r.light)
+        }
+        None => {}
+    }
+}
+
+/// A line per light of the scene, then one per bright region that is not a light.
+pub(super) fn light_lines(
+    out: &mut String,
+    lights: &[specmap::envmap::scene::Light],
+    bright_reflectors: &[String],
+) {
+    for l in lights {
         outln!(
             out,
             "  light        {:6} {} ({:.1}% of the energy, {} pixels, {:.1} deg up): {}",
@@ -502,17 +540,10 @@ fn write_lights(out: &mut String, r: &convert::ConvertReport) {
             l.reason
         );
     }
-    if r.lights.is_empty() {
+    if lights.is_empty() {
         outln!(out, "  light        none found in the map");
     }
-    match &r.light_choice {
-        Some(c) => outln!(out, "  main light   {} (auto: {})", r.light, c.reason),
-        None if r.lights_mode == Lights::One || r.mode != "faithful" => {
-            outln!(out, "  main light   {}", r.light)
-        }
-        None => {}
-    }
-    for b in &r.bright_reflectors {
+    for b in bright_reflectors {
         outln!(out, "  reflector    {b}");
     }
 }

@@ -209,7 +209,7 @@ pub fn run(a: DemoArgs) -> anyhow::Result<()> {
     for name in &names {
         guard.output("-o", out(name));
     }
-    guard.check()?;
+    guard.folder("-o", &dir).check()?;
     // The map is read once up front (a 1024x512 map in ~0.05 s): a file that is not an image,
     // or not an environment layout, fails before anything is written.
     let probe = exrio::read_rgb(&env_path, None)?;

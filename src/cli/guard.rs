@@ -1,6 +1,9 @@
 //! The check every command makes before any work: no output is one of its inputs (inputs are
 //! never overwritten) or another of its outputs, and every output may be written (absent, or a
-//! regular file: never a directory, device, fifo or socket; in a folder that takes new files).
+//! regular file: never a directory, device, fifo or socket; in a folder that exists and takes
+//! new files). No command creates the folder of a file output: a missing one is refused, named.
+//! A command whose output is itself a folder (`demo -o`, `render --sweep-out`,
+//! `batch --out-dir`) declares it ([`Guard::folder`]) and creates it itself.
 
 use std::path::{Path, PathBuf};
 
@@ -9,6 +12,7 @@ use std::path::{Path, PathBuf};
 pub struct Guard {
     inputs: Vec<(String, PathBuf)>,
     outputs: Vec<(String, PathBuf)>,
+    folders: Vec<(String, PathBuf)>,
 }
 
 impl Guard {
@@ -54,9 +58,23 @@ impl Guard {
         self
     }
 
+    /// A folder the command writes its files into and creates itself when missing (`demo -o`,
+    /// `render --sweep-out`, `batch --out-dir`), once the check and its own early checks pass:
+    /// its files are not refused for a missing folder.
+    pub fn folder(&mut self, what: &str, dir: impl AsRef<Path>) -> &mut Guard {
+        self.folders
+            .push((what.to_string(), dir.as_ref().to_path_buf()));
+        self
+    }
+
     /// Fails, naming both files, when an output is an input or another output, or naming the
     /// output when it cannot be replaced by a regular file. Nothing is written.
     pub fn check(&self) -> anyhow::Result<()> {
+        for (what, dir) in &self.folders {
+            if dir.exists() && !dir.is_dir() {
+                anyhow::bail!("{what} {}: exists and is not a folder", dir.display());
+            }
+        }
         for (i, (what, out)) in self.outputs.iter().enumerate() {
             for (in_what, input) in &self.inputs {
                 if specmap::io::same_file(out, input) {
@@ -83,14 +101,22 @@ impl Guard {
                 }
             }
             specmap::io::check_output_kind(out)?;
-            // A folder that exists but takes no new file fails now, not after the work.
-            if out
-                .parent()
-                .is_none_or(|p| p.as_os_str().is_empty() || p.is_dir())
-            {
-                let probe = specmap::io::temp_path_for(out)?;
-                specmap::io::discard_temp(&probe);
+            if let Some(dir) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
+                if !dir.is_dir() && self.folders.iter().any(|(_, f)| f == dir) {
+                    // The command creates it: nothing there to probe yet.
+                    continue;
+                }
+                if !dir.is_dir() {
+                    anyhow::bail!(
+                        "{what} {}: the folder {} does not exist (no command creates the folder                          of an output file: create it first)",
+                        out.display(),
+                        dir.display()
+                    );
+                }
             }
+            // A folder that exists but takes no new file fails now, not after the work.
+            let probe = specmap::io::temp_path_for(out)?;
+            specmap::io::discard_temp(&probe);
         }
         Ok(())
     }
@@ -121,13 +147,13 @@ mod tests {
     fn outputs_must_differ_from_each_other_but_not_from_missing_inputs() {
         let d = tempfile::tempdir().unwrap();
         let a = d.path().join("a.png");
+        std::fs::create_dir(d.path().join("x")).unwrap();
         let e = Guard::new()
             .input("input", d.path().join("missing.exr"))
             .output("-o", &a)
-            .output("--plot", d.path().join("x").join("..").join("a.png"))
+            .output("--plot", d.path().join("x").join("b.png"))
             .check();
-        // x/ does not exist, so x/../a.png is not resolved to a.png; the same spelling is.
-        assert!(e.is_ok());
+        assert!(e.is_ok(), "{e:?}");
         let e = Guard::new()
             .output("-o", &a)
             .output("--plot", &a)
@@ -135,6 +161,39 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("are the same file"), "{e}");
+    }
+
+    #[test]
+    fn a_missing_output_folder_is_refused_naming_it_and_not_created() {
+        let d = tempfile::tempdir().unwrap();
+        let missing = d.path().join("new").join("folder");
+        let e = Guard::new()
+            .output("-o", missing.join("x.exr"))
+            .check()
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("-o "), "{e}");
+        assert!(
+            e.contains(&format!("the folder {} does not exist", missing.display())),
+            "{e}"
+        );
+        assert!(!d.path().join("new").exists());
+    }
+
+    #[test]
+    fn a_folder_the_command_creates_may_be_missing_but_not_a_file() {
+        let d = tempfile::tempdir().unwrap();
+        let dir = d.path().join("new").join("out");
+        Guard::new()
+            .folder("--out-dir", &dir)
+            .output("--out-dir", dir.join("a.exr"))
+            .check()
+            .unwrap();
+        assert!(!d.path().join("new").exists(), "the check creates nothing");
+        let file = d.path().join("file");
+        std::fs::write(&file, "x").unwrap();
+        let e = Guard::new().folder("-o", &file).check().unwrap_err();
+        assert!(e.to_string().contains("exists and is not a folder"), "{e}");
     }
 
     #[test]

@@ -1,5 +1,6 @@
 //! Flag definitions and the dispatch to each command.
 
+mod batch;
 mod bench;
 mod color;
 mod convert;
@@ -7,6 +8,7 @@ mod data;
 mod demo;
 mod fit;
 mod guard;
+mod inspect;
 mod render;
 mod rendition;
 mod roundtrip;
@@ -34,7 +36,9 @@ Examples:
   specmap data show D65 --range 380:780:5 --plot d65.png
   specmap color colorchecker:red --under D65 --json
   specmap color my_lamp.csv
-  specmap convert envmaps/sunrise.exr -o sunrise.spectral.exr --light auto
+  specmap convert envmaps/sunrise.exr -o sunrise.spectral.exr
+  specmap inspect envmaps/sunrise.exr --overlay lights.png
+  specmap batch envmaps --out-dir spectral --jobs 2
   specmap fit --light FL2 --mode exact -o fit.json --plot basis.png
   specmap rendition truth.spectral.exr converted.exr --normals up,px,nx,pz,nz
   specmap thinfilm --layers 2.7:270 --substrate 1.45 --json
@@ -65,6 +69,12 @@ enum Command {
     /// Convert an RGB environment map (EXR/HDR: lat-long, cube, cross, strip or six face files)
     /// to spectral OpenEXR.
     Convert(Box<convert::ConvertArgs>),
+    /// The lights a map holds (sun, sky, windows, lamps) and the conversion's plan, drawn over
+    /// the map if asked; writes no spectral file.
+    Inspect(Box<inspect::InspectArgs>),
+    /// Convert a library of maps (files, folders, lists) into one folder: resumable, shardable.
+    #[command(after_help = batch::AFTER_HELP)]
+    Batch(Box<batch::BatchArgs>),
     /// Fit the paper's basis weights w_R, w_G, w_B for a main light; exact and non-negative modes.
     Fit(fit::FitArgs),
     /// Spectral preview render (Eq. 1 Phong, thin films) of the paper's scenes, GPU or CPU.
@@ -94,7 +104,9 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Data(c) => data::run(c),
         Command::Color(a) => color::run(a),
         Command::Convert(a) => convert::run(*a),
+        Command::Batch(a) => batch::run(*a),
         Command::Fit(a) => fit::run(a),
+        Command::Inspect(a) => inspect::run(*a),
         Command::Render(a) => render::run(*a),
         Command::Rendition(a) => rendition::run(a),
         Command::Roundtrip(a) => roundtrip::run(a),

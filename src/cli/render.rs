@@ -218,6 +218,7 @@ pub fn run(a: RenderArgs) -> anyhow::Result<()> {
     }
     match (&a.sweep, &a.sweep_out) {
         (Some(_), Some(dir)) => {
+            guard.folder("--sweep-out", dir);
             for name in ["sweep.md", "sweep.json", "sweep.png"] {
                 guard.output("--sweep-out", dir.join(name));
             }

@@ -13,7 +13,7 @@ use crate::envmap::layout::{EnvMap, Layout, Orientation};
 use crate::envmap::light::{LightChoice, WhiteChoice};
 use crate::envmap::plan::{self, Analysis, PixelPlan, Plan};
 use crate::envmap::roundtrip_stats::{Floor, RoundTripStats};
-use crate::envmap::scene::{Light, ReflectorModel, Scene};
+use crate::envmap::scene::{Levels, Light, ReflectorModel, Reflectors, Scene};
 use crate::envmap::sun::SunSettings;
 use crate::envmap::write::{self, FileSettings, SpectraCount};
 use crate::error::{Error, Result};
@@ -386,11 +386,23 @@ pub struct Inspection {
     pub input_layout: Layout,
     pub input_size: [usize; 2],
     pub sanitized: Sanitized,
-    pub analysis: Analysis,
+    /// Every light of the scene (as `convert --json` has them).
+    pub lights: Vec<Light>,
+    pub sun: SunReport,
+    pub light: String,
+    pub light_choice: Option<LightChoice>,
+    pub white: WhiteChoice,
+    pub levels: Levels,
+    pub bright_reflectors: Vec<String>,
+    pub reflector_energy_share: f64,
+    pub reflectors: Reflectors,
+    pub mode: String,
     pub plan: Plan,
-    /// The map as analysed (for drawing).
+    /// The map as analysed, and the scene (for drawing).
     #[serde(skip)]
     pub map: EnvMap,
+    #[serde(skip)]
+    pub scene: Scene,
 }
 
 /// Reads `input` and settles its RGB space (see [`input::SpaceChoice`]): the options every
@@ -411,15 +423,26 @@ pub fn inspect(input: &str, opts: &ConvertOptions) -> Result<Inspection> {
     let opts = &opts;
     let analysis = plan::analyse(&mut read, opts)?;
     let plan = plan::plan(&analysis, opts)?;
+    let scene = analysis.scene;
     Ok(Inspection {
         input: input.to_string(),
         input_description: read.description,
         input_layout: read.layout,
         input_size: read.size,
         sanitized: read.sanitized,
-        analysis,
+        lights: scene.lights.clone(),
+        sun: SunReport::of(&scene),
+        light: analysis.light,
+        light_choice: analysis.light_choice,
+        white: analysis.white,
+        levels: scene.levels,
+        bright_reflectors: scene.bright_reflectors.clone(),
+        reflector_energy_share: scene.reflector_energy_share,
+        reflectors: scene.reflectors.clone(),
+        mode: mode_name(plan.method, plan.fit.mode),
         plan,
         map: read.map,
+        scene,
     })
 }
 

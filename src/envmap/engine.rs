@@ -242,6 +242,35 @@ pub struct Engine {
     metric: RgbMetric,
 }
 
+/// Where each set of spectra sits in [`Engine::spectra_table`]: three ColorChecker x light,
+/// three CIE daylight, three smooth x light, the sun.
+pub const TABLE_COLORCHECKER: usize = 0;
+pub const TABLE_DAYLIGHT: usize = 3;
+pub const TABLE_SMOOTH: usize = 6;
+pub const TABLE_SUN: usize = 9;
+/// The number of spectra in [`Engine::spectra_table`].
+pub const TABLE_LEN: usize = 10;
+
+/// A pixel's spectrum as a combination of the engine's spectra:
+/// `sum_j weights[j] * table[first + j]` for j below `count` (f32 products summed in j order,
+/// exactly as the spectrum written by [`Engine::spectrum`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Combination {
+    pub first: usize,
+    pub count: usize,
+    pub weights: [f32; 3],
+}
+
+impl Combination {
+    fn of(first: usize, a: &Vector3<f64>) -> Combination {
+        Combination {
+            first,
+            count: 3,
+            weights: [a[0] as f32, a[1] as f32, a[2] as f32],
+        }
+    }
+}
+
 /// What one pixel became.
 #[derive(Debug, Clone, Copy)]
 pub struct PixelResult {
@@ -253,6 +282,8 @@ pub struct PixelResult {
     pub negative: bool,
     /// Which spectrum the pixel got.
     pub took: Took,
+    /// The written spectrum as a combination of [`Engine::spectra_table`].
+    pub combination: Combination,
 }
 
 /// Which spectrum a pixel got.
@@ -455,6 +486,21 @@ impl Engine {
         &self.basis
     }
 
+    /// Every spectrum a pixel's [`Combination`] refers to, at the `TABLE_*` positions (a set
+    /// the engine does not use is zeros there).
+    pub fn spectra_table(&self) -> Vec<Vec<f32>> {
+        let zeros = || vec![0f32; self.grid.len()];
+        let three = |b: &Option<Basis3>| match b {
+            Some(b) => b.spectra.to_vec(),
+            None => vec![zeros(), zeros(), zeros()],
+        };
+        let mut table = self.basis.to_vec();
+        table.extend(three(&self.daylight));
+        table.extend(three(&self.smooth));
+        table.push(self.sun.as_ref().map_or_else(zeros, |(s, _)| s.clone()));
+        table
+    }
+
     /// The sun's SPD at Y = 1 on the output grid, if any.
     pub fn sun_spectrum(&self) -> Option<&[f32]> {
         self.sun.as_ref().map(|(s, _)| s.as_slice())
@@ -581,6 +627,11 @@ impl Engine {
                         luminance: c[3],
                         negative: sun.iter().any(|&v| v < 0.0),
                         took: Took::Sun,
+                        combination: Combination {
+                            first: TABLE_SUN,
+                            count: 1,
+                            weights: [s, 0.0, 0.0],
+                        },
                     };
                 }
             }
@@ -596,6 +647,7 @@ impl Engine {
                         luminance: d.luminance(&a),
                         negative,
                         took: Took::Daylight,
+                        combination: Combination::of(TABLE_DAYLIGHT, &a),
                     };
                 }
             }
@@ -616,6 +668,7 @@ impl Engine {
                     luminance: s.luminance(&a),
                     negative,
                     took: Took::Smooth,
+                    combination: Combination::of(TABLE_SMOOTH, &a),
                 };
             }
         }
@@ -625,6 +678,7 @@ impl Engine {
             luminance: (0..3).map(|j| mcc[j] * self.basis_y[j]).sum(),
             negative,
             took: Took::Colorchecker,
+            combination: Combination::of(TABLE_COLORCHECKER, &mcc),
         }
     }
 

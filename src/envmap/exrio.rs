@@ -1,10 +1,10 @@
 //! OpenEXR and Radiance HDR input, streaming spectral OpenEXR output (Fichet et al. 2021 layout).
 
+use super::block::{BlockEncoder, BlockFormat, Encoded, Interleaved, LineSource};
 use super::RgbImage;
 use crate::colorimetry::Chromaticities;
 use crate::error::{Error, Result};
 use exr::block::chunk::TileCoordinates;
-use exr::block::chunk::{Chunk, CompressedBlock, CompressedScanLineBlock};
 use exr::block::reader::ChunksReader;
 use exr::block::writer::ChunksWriter;
 use exr::block::{BlockIndex, UncompressedBlock};
@@ -15,7 +15,6 @@ use exr::meta::attribute::{
 use exr::meta::header::Header;
 use exr::meta::{BlockDescription, MetaData};
 use exr::prelude::f16;
-use half::slice::HalfFloatSliceExt;
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::fs::File;
@@ -692,8 +691,8 @@ fn attr_from_exr(v: &AttributeValue) -> Option<AttrValue> {
     })
 }
 
-/// A compressed block and its index in increasing-y order.
-type Encoded = (usize, Chunk);
+/// A block to encode: its first image row, its source and the source's row for it.
+type Job<'a> = (usize, &'a dyn LineSource, usize);
 
 /// Writes a spectral OpenEXR row by row. Complete blocks of rows are encoded (half or float
 /// samples, channels in file order) and compressed in parallel on rayon's threads, then handed
@@ -936,14 +935,7 @@ impl SpectralWriter {
             )));
         }
         let count = rows.len() / row_len;
-        if y0 + count > self.height {
-            return Err(Error::invalid(format!(
-                "{}: rows {y0}..{} exceed the image height {}",
-                self.dest.display(),
-                y0 + count,
-                self.height
-            )));
-        }
+        self.check_height(y0, count)?;
         self.check_values(y0, rows)?;
         let started = std::time::Instant::now();
         let mut rest = rows;
@@ -960,9 +952,9 @@ impl SpectralWriter {
                 filled = std::mem::take(&mut self.pending);
             }
         }
-        let mut jobs: Vec<(usize, &[f32])> = Vec::new();
+        let mut blocks: Vec<(usize, &[f32])> = Vec::new();
         if !filled.is_empty() {
-            jobs.push((self.next_y - filled.len() / row_len, &filled));
+            blocks.push((self.next_y - filled.len() / row_len, &filled));
         }
         if self.pending.is_empty() {
             while !rest.is_empty() {
@@ -970,26 +962,107 @@ impl SpectralWriter {
                 if rest.len() < n {
                     break;
                 }
-                jobs.push((self.next_y, &rest[..n]));
+                blocks.push((self.next_y, &rest[..n]));
                 rest = &rest[n..];
                 self.next_y += n / row_len;
             }
             self.pending.extend_from_slice(rest);
             self.next_y += rest.len() / row_len;
         }
-        let this = &*self;
-        let chunks = jobs
-            .par_iter()
-            .map_init(
-                || super::zip::ZipEncoder::new(this.zip_level),
-                |zip, &(block_y, block)| this.encode_block(zip, block_y, block),
-            )
-            .collect::<Result<Vec<Encoded>>>()?;
-        for chunk in chunks {
-            self.send(chunk)?;
-        }
+        let sources: Vec<(usize, Interleaved)> = blocks
+            .into_iter()
+            .map(|(block_y, rows)| {
+                let src = Interleaved {
+                    rows,
+                    width: self.width,
+                    per_pixel: self.per_pixel,
+                };
+                (block_y, src)
+            })
+            .collect();
+        let jobs: Vec<Job> = sources
+            .iter()
+            .map(|(block_y, src)| (*block_y, src as &dyn LineSource, 0))
+            .collect();
+        self.encode(&jobs)?;
         self.encode_seconds += started.elapsed().as_secs_f64();
         Ok(())
+    }
+
+    /// Adds `count` whole rows starting at row `y0`, asked of `src` a scan line and a channel
+    /// at a time (its row 0 is image row `y0`): the rows must start a block and be whole blocks
+    /// but at the end of the image, and no [`SpectralWriter::write_rows`] call may have left a
+    /// block unfinished. Errors as `write_rows` on values the file cannot hold.
+    pub fn write_lines(&mut self, y0: usize, count: usize, src: &dyn LineSource) -> Result<()> {
+        let lines = self.lines_per_block;
+        let whole = count.is_multiple_of(lines) || y0 + count == self.height;
+        if y0 != self.next_y || !self.pending.is_empty() || !y0.is_multiple_of(lines) || !whole {
+            return Err(Error::invalid(format!(
+                "{}: write_lines needs whole blocks of {lines} rows in order: expected row {}, \
+                 got rows {y0}..{}",
+                self.dest.display(),
+                self.next_y,
+                y0 + count
+            )));
+        }
+        self.check_height(y0, count)?;
+        let started = std::time::Instant::now();
+        let jobs: Vec<Job> = (y0..y0 + count)
+            .step_by(lines)
+            .map(|block_y| (block_y, src, block_y - y0))
+            .collect();
+        self.encode(&jobs)?;
+        self.next_y += count;
+        self.encode_seconds += started.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// Encodes blocks in parallel (one [`BlockEncoder`] per thread) and queues them in order
+    /// for the file; the error of the first failing block, if any.
+    fn encode(&mut self, jobs: &[Job]) -> Result<()> {
+        let format = self.block_format();
+        let this = &*self;
+        let chunks: Vec<Result<Encoded>> = jobs
+            .par_iter()
+            .map_init(
+                || BlockEncoder::new(this.zip_level),
+                |enc, &(block_y, src, row0)| {
+                    enc.encode(&format, src, row0, block_y, this.block_lines(block_y))
+                },
+            )
+            .collect();
+        for chunk in chunks {
+            self.send(chunk?)?;
+        }
+        Ok(())
+    }
+
+    fn check_height(&self, y0: usize, count: usize) -> Result<()> {
+        if y0 + count > self.height {
+            return Err(Error::invalid(format!(
+                "{}: rows {y0}..{} exceed the image height {}",
+                self.dest.display(),
+                y0 + count,
+                self.height
+            )));
+        }
+        Ok(())
+    }
+
+    /// What every block of the file shares.
+    fn block_format(&self) -> BlockFormat<'_> {
+        BlockFormat {
+            dest: &self.dest,
+            width: self.width,
+            file_order: &self.file_order,
+            names: &self.names,
+            half: self.half,
+            scale: self.scale,
+            scales: &self.file_scales,
+            compression: self.compression,
+            lines_per_block: self.lines_per_block,
+            headers: &self.headers,
+        }
     }
 
     /// Scan lines in the block that starts at row `block_y`.
@@ -1020,129 +1093,18 @@ impl SpectralWriter {
                     .map(|i| start + i)
             });
         if let Some(i) = bad {
-            let v = rows[i];
             let pixel = i / self.per_pixel;
+            let format = self.block_format();
             let (x, y) = (pixel % self.width, y0 + pixel / self.width);
-            let channel = &self.names[i % self.per_pixel];
-            let why = if !v.is_finite() {
-                "is not finite".to_string()
-            } else if self.half {
-                format!(
-                    "exceeds the half-float range (65504){}; write float or set an EV scale",
-                    if scale != 1.0 {
-                        " after the EV scale"
-                    } else {
-                        ""
-                    }
-                )
-            } else {
-                "exceeds the float range after the EV scale".to_string()
-            };
-            return Err(Error::invalid(format!(
-                "{}: pixel ({x}, {y}) channel {channel}: value {v} {why}",
-                self.dest.display()
-            )));
+            return Err(super::block::value_error(
+                &format,
+                rows[i],
+                x,
+                y,
+                i % self.per_pixel,
+            ));
         }
         Ok(())
-    }
-
-    /// One block of caller rows as an OpenEXR chunk: samples scan line by scan line, channels
-    /// in file order, then compressed.
-    fn encode_block(
-        &self,
-        zip: &mut super::zip::ZipEncoder,
-        block_y: usize,
-        rows: &[f32],
-    ) -> Result<Encoded> {
-        let w = self.width;
-        let lines = rows.len() / (w * self.per_pixel);
-        let bytes_per = if self.half { 2 } else { 4 };
-        // The exr crate's compressors take native-endian samples; the file holds little-endian.
-        let own = matches!(
-            self.compression,
-            Compression::None | Compression::Zip | Compression::Zips
-        );
-        let channels = self.file_order.len();
-        let mut data = vec![0u8; rows.len() * bytes_per];
-        // One scan line, channel-major (file order), f32 then half.
-        let mut planar = vec![0f32; channels * w];
-        let mut halves = vec![f16::ZERO; if self.half { w } else { 0 }];
-        let line_bytes = channels * w * bytes_per;
-        for (row, out) in rows
-            .chunks_exact(w * self.per_pixel)
-            .zip(data.chunks_exact_mut(line_bytes))
-        {
-            // Transposed a tile of pixels at a time: the tile stays in L1 while each channel's
-            // values are gathered from it and written as one run.
-            const TILE: usize = 32;
-            for (t, tile) in row.chunks(TILE * self.per_pixel).enumerate() {
-                let x0 = t * TILE;
-                for (k, &c) in self.file_order.iter().enumerate() {
-                    let dst = &mut planar[k * w + x0..];
-                    for (d, px) in dst.iter_mut().zip(tile.chunks_exact(self.per_pixel)) {
-                        *d = px[c];
-                    }
-                }
-            }
-            if self.scale != 1.0 {
-                for (line, &s) in planar.chunks_exact_mut(w).zip(&self.file_scales) {
-                    line.iter_mut().for_each(|v| *v *= s);
-                }
-            }
-            let out_lines = out.chunks_exact_mut(w * bytes_per);
-            for (line, dst) in planar.chunks_exact(w).zip(out_lines) {
-                if self.half {
-                    halves.convert_from_f32_slice(line);
-                    for (d, v) in dst.chunks_exact_mut(2).zip(&halves) {
-                        d.copy_from_slice(&if own {
-                            v.to_le_bytes()
-                        } else {
-                            v.to_ne_bytes()
-                        });
-                    }
-                } else {
-                    for (d, v) in dst.chunks_exact_mut(4).zip(line) {
-                        d.copy_from_slice(&if own {
-                            v.to_le_bytes()
-                        } else {
-                            v.to_ne_bytes()
-                        });
-                    }
-                }
-            }
-        }
-        let index = block_y / self.lines_per_block;
-        let compressed_pixels_le = match self.compression {
-            Compression::None => data,
-            Compression::Zip | Compression::Zips => zip.encode(&data),
-            _ => {
-                let block = UncompressedBlock {
-                    index: BlockIndex {
-                        layer: 0,
-                        pixel_position: Vec2(0, block_y),
-                        pixel_size: Vec2(w, lines),
-                        level: Vec2(0, 0),
-                    },
-                    data,
-                };
-                let chunk = block.compress_to_chunk(&self.headers).map_err(|e| {
-                    Error::invalid(format!(
-                        "{}: compressing rows {block_y}..{} failed: {e}",
-                        self.dest.display(),
-                        block_y + lines
-                    ))
-                })?;
-                return Ok((index, chunk));
-            }
-        };
-        let chunk = Chunk {
-            layer_index: 0,
-            compressed_block: CompressedBlock::ScanLine(CompressedScanLineBlock {
-                y_coordinate: block_y as i32,
-                compressed_pixels_le,
-            }),
-        };
-        Ok((index, chunk))
     }
 
     fn send(&mut self, block: Encoded) -> Result<()> {

@@ -1,6 +1,7 @@
 //! Environment maps: layouts and directions, EXR and HDR I/O, sun detection, and the conversion
 //! of RGB maps to spectral ones.
 
+pub mod block;
 pub mod carriers;
 pub mod convert;
 pub mod engine;
@@ -10,7 +11,9 @@ pub mod input;
 pub mod layout;
 pub mod light;
 pub mod metric;
+pub mod overlay;
 pub mod plan;
+pub mod planes;
 pub mod roundtrip;
 pub mod roundtrip_stats;
 pub mod scene;

@@ -3,7 +3,7 @@
 
 use crate::envmap::carriers::{self, Written};
 use crate::envmap::convert::OutputFormat;
-use crate::envmap::engine::{PixelKind, Took};
+use crate::envmap::engine::{Engine, PixelKind, Took};
 use crate::envmap::exrio::{
     spectral_channel_name, AttrValue, ChannelSet, Compression, EnvmapAttr, Precision,
     SpectralLayout, SpectralWriter, HALF_MAX,
@@ -11,6 +11,7 @@ use crate::envmap::exrio::{
 use crate::envmap::layout::{EnvMap, Layout};
 use crate::envmap::metric::RgbMetric;
 use crate::envmap::plan::{PixelPlan, Plan};
+use crate::envmap::planes::{self, RowMut, SpectralRows};
 use crate::envmap::roundtrip_stats::{Floor, RoundTripAccumulator, RoundTripStats};
 use crate::envmap::scene::Cells;
 use crate::error::Result;
@@ -120,19 +121,29 @@ impl Pixels<'_> {
         }
     }
 
+    /// The paper's modes: what pixel (x, y) is (the sun's, above the horizon, or plain), and
+    /// whether it is the sun's.
+    fn basis_kind(&self, x: usize, y: usize) -> (PixelKind, bool) {
+        let PixelPlan::Basis { sun, .. } = &self.plan.pixels else {
+            return (PixelKind::Plain, false);
+        };
+        let cell = self.cells.cell_of_pixel(self.map, x, y).unwrap_or(0);
+        if sun[cell] {
+            (PixelKind::Sun, true)
+        } else if self.map.direction(x, y).is_some_and(|d| d[1] > 0.0) {
+            (PixelKind::Sky, false)
+        } else {
+            (PixelKind::Plain, false)
+        }
+    }
+
     /// Writes pixel (x, y)'s spectrum into `out`; the basis format's coefficients into `coef`.
     fn spectrum(&self, x: usize, y: usize, out: &mut [f32], coef: &mut [f32]) -> (Written, bool) {
         let rgb = self.map.image.get(x, y);
         let cell = self.cells.cell_of_pixel(self.map, x, y).unwrap_or(0);
         match &self.plan.pixels {
-            PixelPlan::Basis { engine, sun } => {
-                let kind = if sun[cell] {
-                    PixelKind::Sun
-                } else if self.map.direction(x, y).is_some_and(|d| d[1] > 0.0) {
-                    PixelKind::Sky
-                } else {
-                    PixelKind::Plain
-                };
+            PixelPlan::Basis { engine, .. } => {
+                let kind = self.basis_kind(x, y).0;
                 if self.plan.format == OutputFormat::Basis {
                     let c = engine.coefficients(rgb, kind == PixelKind::Sun);
                     for k in 0..4 {
@@ -314,29 +325,15 @@ pub fn write(
     let block_bytes = lines * width * per_pixel * std::mem::size_of::<f32>();
     let blocks = (BATCH_BYTES / block_bytes.max(1)).clamp(1, height.div_ceil(lines));
     let rows_per_block = (blocks * lines).max(16).min(height);
-    let mut buffer = vec![0f32; rows_per_block * width * per_pixel];
     let px = Pixels { map, cells, plan };
-    let mut tally = Tally::default();
-    let mut y0 = 0;
-    while y0 < height {
-        let rows = rows_per_block.min(height - y0);
-        let buf = &mut buffer[..rows * width * per_pixel];
-        let batch = buf
-            .par_chunks_mut(width * per_pixel)
-            .enumerate()
-            .fold(Tally::default, |mut t, (r, row)| {
-                write_row(&px, y0 + r, row, per_pixel, &mut t);
-                t
-            })
-            .reduce(Tally::default, |mut a, b| {
-                a.merge(&b);
-                a
-            });
-        tally.merge(&batch);
-        writer.write_rows(y0, buf)?;
-        y0 += rows;
-        progress(y0, height);
-    }
+    let tally = match &plan.pixels {
+        PixelPlan::Basis { engine, .. } => {
+            stream_planes(&px, engine, &mut writer, rows_per_block, progress)?
+        }
+        PixelPlan::Carriers { .. } => {
+            stream_rows(&px, &mut writer, rows_per_block, per_pixel, progress)?
+        }
+    };
     let seconds_encode = writer.encode_seconds();
     let bytes = writer.finish()?;
     let floor = tally.all.floor();
@@ -353,13 +350,120 @@ pub fn write(
     })
 }
 
+/// The rows written pixel-interleaved, a batch at a time (the faithful method: each pixel's
+/// carrier and modulation).
+fn stream_rows(
+    px: &Pixels,
+    writer: &mut SpectralWriter,
+    rows_per_block: usize,
+    per_pixel: usize,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<Tally> {
+    let (width, height) = (px.map.image.width, px.map.image.height);
+    let mut buffer = vec![0f32; rows_per_block * width * per_pixel];
+    let mut tally = Tally::default();
+    let mut y0 = 0;
+    while y0 < height {
+        let rows = rows_per_block.min(height - y0);
+        let buf = &mut buffer[..rows * width * per_pixel];
+        let batch = buf
+            .par_chunks_mut(width * per_pixel)
+            .enumerate()
+            .fold(Tally::default, |mut t, (r, row)| {
+                write_row(px, y0 + r, row, per_pixel, &mut t);
+                t
+            })
+            .reduce(Tally::default, |mut a, b| {
+                a.merge(&b);
+                a
+            });
+        tally.merge(&batch);
+        writer.write_rows(y0, buf)?;
+        y0 += rows;
+        progress(y0, height);
+    }
+    Ok(tally)
+}
+
+/// The rows as coefficient planes of the engine's few spectra (the paper's modes), the next
+/// batch filled while the last is compressed: a band's scan line is one multiply-add per pixel
+/// and spectrum, computed as the writer asks for it.
+fn stream_planes(
+    px: &Pixels,
+    engine: &Engine,
+    writer: &mut SpectralWriter,
+    rows_per_block: usize,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<Tally> {
+    let (width, height) = (px.map.image.width, px.map.image.height);
+    let bands = match px.plan.format {
+        OutputFormat::Spectral => px.plan.grid.len(),
+        OutputFormat::Basis => 0,
+    };
+    let new_batch = || SpectralRows::new(engine.spectra_table(), bands, 4, width, rows_per_block);
+    let mut planes = [new_batch(), new_batch()];
+    // Each row's tally is merged as it is done (a map's rows of luminance bins would not fit).
+    let tally = std::sync::Mutex::new(Tally::default());
+    let fill = |y: usize, mut row: RowMut| {
+        let mut t = Tally::default();
+        // The spectrum itself is only looked at (negative values, the round trip).
+        let mut scratch = vec![0f32; px.plan.grid.len()];
+        for x in 0..width {
+            let rgb = px.map.image.get(x, y);
+            let (kind, is_sun) = px.basis_kind(x, y);
+            let r = engine.spectrum(rgb, kind, &mut scratch);
+            let extra = match px.plan.format {
+                OutputFormat::Spectral => {
+                    row.set(x, &r.combination);
+                    [rgb[0], rgb[1], rgb[2], is_sun as u8 as f32]
+                }
+                OutputFormat::Basis => engine.coefficients(rgb, is_sun).map(|c| c as f32),
+            };
+            for (e, v) in extra.into_iter().enumerate() {
+                row.set_extra(e, x, v);
+            }
+            let w = Written {
+                rgb_back: r.rgb_back,
+                took: r.took,
+                exact: true,
+            };
+            measure(
+                &mut t,
+                px,
+                x,
+                y,
+                w,
+                r.negative,
+                is_sun && r.took == Took::Sun,
+            );
+        }
+        tally
+            .lock()
+            .expect("no tally is merged by a panicking thread")
+            .merge(&t);
+    };
+    planes::stream(
+        &mut planes,
+        height,
+        rows_per_block,
+        &fill,
+        &mut |y0, rows, batch| {
+            writer.write_lines(y0, rows, batch)?;
+            progress(y0 + rows, height);
+            Ok(())
+        },
+    )?;
+    Ok(tally
+        .into_inner()
+        .expect("no tally is merged by a panicking thread"))
+}
+
 /// One row of the output: each pixel's values, and what it took, added to `t`.
 fn write_row(px: &Pixels, y: usize, row: &mut [f32], per_pixel: usize, t: &mut Tally) {
     let width = px.map.image.width;
     let bands = px.plan.grid.len();
     // The basis format writes coefficients; the round trip still needs the spectrum.
     let mut scratch = vec![0f32; bands];
-    let metric = px.metric();
     for x in 0..width {
         let rgb = px.map.image.get(x, y);
         let out = &mut row[x * per_pixel..(x + 1) * per_pixel];
@@ -376,21 +480,37 @@ fn write_row(px: &Pixels, y: usize, row: &mut [f32], per_pixel: usize, t: &mut T
                 (w, is_sun, carriers::is_negative(&scratch))
             }
         };
-        let lum = metric.luminance(rgb);
-        let de = if lum > 0.0 {
-            metric.round_trip_error(rgb, w.rgb_back)
-        } else {
-            0.0
-        };
-        let (took, exact) = px.exactness(w, de);
-        t.count.add(took, negative);
-        let omega = px.map.solid_angle(x, y);
-        t.all.add(x, y, lum, omega, de);
-        if !is_sun {
-            t.no_sun.add(x, y, lum, omega, de);
-            if !exact {
-                t.inexact.add(x, y, lum, omega, de);
-            }
+        measure(t, px, x, y, w, negative, is_sun);
+    }
+}
+
+/// Adds pixel (x, y) to the tally: which spectrum it took, and its round trip (see
+/// [`crate::envmap::roundtrip_stats`]) over all pixels, without the sun, and if inexact.
+fn measure(
+    t: &mut Tally,
+    px: &Pixels,
+    x: usize,
+    y: usize,
+    w: Written,
+    negative: bool,
+    is_sun: bool,
+) {
+    let metric = px.metric();
+    let rgb = px.map.image.get(x, y);
+    let lum = metric.luminance(rgb);
+    let de = if lum > 0.0 {
+        metric.round_trip_error(rgb, w.rgb_back)
+    } else {
+        0.0
+    };
+    let (took, exact) = px.exactness(w, de);
+    t.count.add(took, negative);
+    let omega = px.map.solid_angle(x, y);
+    t.all.add(x, y, lum, omega, de);
+    if !is_sun {
+        t.no_sun.add(x, y, lum, omega, de);
+        if !exact {
+            t.inexact.add(x, y, lum, omega, de);
         }
     }
 }

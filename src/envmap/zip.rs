@@ -11,11 +11,13 @@ pub const DEFAULT_LEVEL: u8 = 4;
 /// The highest level libdeflate accepts.
 pub const MAX_LEVEL: u8 = 12;
 
-/// A reusable compressor (one per thread: libdeflate keeps large match tables).
+/// A reusable compressor (one per thread: libdeflate keeps large match tables; the split,
+/// predictor and output buffers are kept between blocks too).
 pub struct ZipEncoder {
     compressor: libdeflater::Compressor,
     split: Vec<u8>,
     delta: Vec<u8>,
+    out: Vec<u8>,
 }
 
 impl ZipEncoder {
@@ -27,6 +29,7 @@ impl ZipEncoder {
             compressor: libdeflater::Compressor::new(level),
             split: Vec::new(),
             delta: Vec::new(),
+            out: Vec::new(),
         }
     }
 
@@ -34,59 +37,85 @@ impl ZipEncoder {
     /// order) as an OpenEXR ZIP/ZIPS chunk. When compression does not make the block smaller,
     /// OpenEXR stores the raw bytes instead, and so does this.
     pub fn encode(&mut self, raw_le: &[u8]) -> Vec<u8> {
-        let n = raw_le.len();
+        let mut split = std::mem::take(&mut self.split);
+        split_bytes(raw_le, &mut split);
+        let chunk = self.encode_split(&split);
+        self.split = split;
+        chunk
+    }
+
+    /// [`ZipEncoder::encode`] of a block already split: the bytes at even offsets of the raw
+    /// block (the low bytes of half samples), then those at odd offsets, as OpenEXR's predictor
+    /// first arranges them. A writer that produces samples can lay them out so directly.
+    pub fn encode_split(&mut self, split: &[u8]) -> Vec<u8> {
+        let n = split.len();
         if n == 0 {
             return Vec::new();
         }
-        // Bytes of even offsets first, then odd ones (low and high bytes of each half sample
-        // gathered), then each byte replaced by its difference to the previous one, plus 128.
-        // Written as zips over slices so that the compiler vectorises both passes.
-        self.split.clear();
-        self.split.resize(n, 0);
-        let (low, high) = self.split.split_at_mut(n.div_ceil(2));
-        if n % 2 == 1 {
-            low[n / 2] = raw_le[n - 1];
-        }
-        // Sixteen pairs at a time as fixed-size arrays, which the compiler turns into shuffles,
-        // then the rest a pair at a time.
-        let (low, high) = (&mut low[..n / 2], &mut high[..n / 2]);
-        let done = n / 2 / 16 * 16;
-        for ((l, h), p) in low
-            .chunks_exact_mut(16)
-            .zip(high.chunks_exact_mut(16))
-            .zip(raw_le.chunks_exact(32))
-        {
-            let (l, h): (&mut [u8; 16], &mut [u8; 16]) =
-                (l.try_into().unwrap(), h.try_into().unwrap());
-            let p: &[u8; 32] = p.try_into().unwrap();
-            for i in 0..16 {
-                l[i] = p[2 * i];
-                h[i] = p[2 * i + 1];
-            }
-        }
-        for i in done..n / 2 {
-            low[i] = raw_le[2 * i];
-            high[i] = raw_le[2 * i + 1];
-        }
-        self.delta.clear();
+        // Each byte replaced by its difference to the previous one, plus 128 (zipped slices:
+        // the compiler vectorises it).
         self.delta.resize(n, 0);
-        self.delta[0] = self.split[0];
+        self.delta[0] = split[0];
         for ((d, &cur), &prev) in self.delta[1..]
             .iter_mut()
-            .zip(&self.split[1..])
-            .zip(&self.split[..n - 1])
+            .zip(&split[1..])
+            .zip(&split[..n - 1])
         {
             *d = cur.wrapping_sub(prev).wrapping_add(128);
         }
-        let mut out = vec![0u8; self.compressor.zlib_compress_bound(n)];
-        match self.compressor.zlib_compress(&self.delta, &mut out) {
-            Ok(size) if size < n => {
-                out.truncate(size);
-                out
-            }
-            _ => raw_le.to_vec(),
+        self.out.resize(self.compressor.zlib_compress_bound(n), 0);
+        match self.compressor.zlib_compress(&self.delta, &mut self.out) {
+            Ok(size) if size < n => self.out[..size].to_vec(),
+            _ => unsplit_bytes(split),
         }
     }
+}
+
+/// Bytes of even offsets first, then odd ones (low and high bytes of each half sample
+/// gathered).
+fn split_bytes(raw_le: &[u8], split: &mut Vec<u8>) {
+    let n = raw_le.len();
+    split.clear();
+    split.resize(n, 0);
+    let (low, high) = split.split_at_mut(n.div_ceil(2));
+    if n % 2 == 1 {
+        low[n / 2] = raw_le[n - 1];
+    }
+    // Sixteen pairs at a time as fixed-size arrays, which the compiler turns into shuffles,
+    // then the rest a pair at a time.
+    let (low, high) = (&mut low[..n / 2], &mut high[..n / 2]);
+    let done = n / 2 / 16 * 16;
+    for ((l, h), p) in low
+        .chunks_exact_mut(16)
+        .zip(high.chunks_exact_mut(16))
+        .zip(raw_le.chunks_exact(32))
+    {
+        let (l, h): (&mut [u8; 16], &mut [u8; 16]) = (l.try_into().unwrap(), h.try_into().unwrap());
+        let p: &[u8; 32] = p.try_into().unwrap();
+        for i in 0..16 {
+            l[i] = p[2 * i];
+            h[i] = p[2 * i + 1];
+        }
+    }
+    for i in done..n / 2 {
+        low[i] = raw_le[2 * i];
+        high[i] = raw_le[2 * i + 1];
+    }
+}
+
+/// The raw block back from its split (the rare block that does not compress).
+fn unsplit_bytes(split: &[u8]) -> Vec<u8> {
+    let n = split.len();
+    let half = n.div_ceil(2);
+    (0..n)
+        .map(|i| {
+            if i % 2 == 0 {
+                split[i / 2]
+            } else {
+                split[half + i / 2]
+            }
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -138,6 +167,30 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn a_block_given_split_encodes_as_the_raw_block() {
+        let raw: Vec<u8> = (0..3000u32)
+            .flat_map(|i| exr::prelude::f16::from_f32((i as f32 * 0.01).cos()).to_le_bytes())
+            .collect();
+        let mut split = Vec::new();
+        split_bytes(&raw, &mut split);
+        assert_eq!(unsplit_bytes(&split), raw);
+        let mut enc = ZipEncoder::new(DEFAULT_LEVEL);
+        let chunk = enc.encode_split(&split);
+        assert_eq!(chunk, ZipEncoder::new(DEFAULT_LEVEL).encode(&raw));
+        assert_eq!(decode(&chunk, raw.len()), raw);
+        // Noise is stored raw, not split.
+        let mut s = 7u32;
+        let noise: Vec<u8> = (0..1000)
+            .map(|_| {
+                s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+                (s >> 24) as u8
+            })
+            .collect();
+        split_bytes(&noise, &mut split);
+        assert_eq!(enc.encode_split(&split), noise);
     }
 
     #[test]

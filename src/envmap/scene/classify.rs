@@ -12,8 +12,8 @@
 //! - **sky / window**: an emitter of daylight colour (CIE 1931 xy within 0.02 of the daylight
 //!   locus) at least [`WINDOW_MIN_K`] and [`WINDOW_MIN_SR`]; or a dim daylight-coloured region of
 //!   the upper hemisphere at least [`SKY_MIN_K`] and [`SKY_MIN_SR`] whose colour no lamp explains
-//!   (farther than [`EXPLAINED_UV`] from every lamp's white and the mixes of two) and that is not a
-//!   wall lit by a window ([`LIT_BY_WINDOW`] times dimmer and of its colour). It is the sky when it
+//!   (farther than [`EXPLAINED_UV`] from every lamp's white and the mixes of two, or of a lamp and
+//!   a window) and that is not a wall lit by a window ([`LIT_BY_WINDOW`] times dimmer and of its colour). It is the sky when it
 //!   reaches [`SKY_TOP_DEG`] or covers [`SKY_LARGE_SR`], otherwise a window; all sky regions are
 //!   one light.
 //!   With a sky in view, every bright daylight-coloured patch above the horizon (sky between
@@ -53,6 +53,8 @@ pub const DAYLIGHT_LAMP_CONTRAST: f64 = 10.0;
 /// An emitter candidate this much dimmer than a lamp, and near its colour, is a surface it lights.
 pub const LIT_BY_LAMP: f64 = 0.05;
 pub const LIT_COLOUR_UV: f64 = 0.05;
+/// A lamp's pixels are those at least this fraction of its peak luminance.
+pub const LAMP_CORE: f64 = 0.25;
 /// Emitters holding less of the energy than this are left to the reflectors (glints, noise).
 pub const MIN_LIGHT_SHARE: f64 = 1e-4;
 /// At most this many emitters are classified (the most energetic).
@@ -153,6 +155,15 @@ pub fn classify(
             .push(sun_light(cells, levels, &candidates[k], settings)?);
     }
     let mut sky_cells = daylight_lights(cells, levels, &candidates, &daylight, &dim, &mut out)?;
+    // The sun's glow above the horizon, where daylight-coloured, is circumsolar sky.
+    if let (Some(k), false) = (sun_index, sky_cells.is_empty()) {
+        let sun_cells = &out.lights[0].cells;
+        sky_cells.extend(candidates[k].e.cells.iter().copied().filter(|i| {
+            sun_cells.binary_search(i).is_err()
+                && cells.direction(*i)[1] > 0.0
+                && daylight_coloured(&cells.xyz(*i))
+        }));
+    }
     for &(k, _) in &daylight {
         taken[k] = true;
     }
@@ -364,7 +375,8 @@ fn dim_skies(
             continue;
         }
         let colour = Colour::of(stats.mean_xyz)?;
-        if !colour.cct_k.is_some_and(|k| k >= SKY_MIN_K) || explained(&colour, lamp_whites) {
+        if !colour.cct_k.is_some_and(|k| k >= SKY_MIN_K) || explained(&colour, lamp_whites, windows)
+        {
             continue;
         }
         let lit_by_window = windows.iter().any(|(w, y)| {
@@ -380,8 +392,9 @@ fn dim_skies(
     Ok(out)
 }
 
-/// Whether a colour is a lamp's white or a mix of two lamps' (within [`EXPLAINED_UV`]).
-fn explained(c: &Colour, lamps: &[Colour]) -> bool {
+/// Whether a colour is a lamp's white, a mix of two lamps' or of a lamp's and a window's (within
+/// [`EXPLAINED_UV`]): the colour of a surface they light.
+fn explained(c: &Colour, lamps: &[Colour], windows: &[(Colour, f64)]) -> bool {
     let p = c.uv;
     let near_segment = |a: [f64; 2], b: [f64; 2]| {
         let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
@@ -393,10 +406,10 @@ fn explained(c: &Colour, lamps: &[Colour]) -> bool {
         };
         (p[0] - a[0] - t * dx).hypot(p[1] - a[1] - t * dy) <= EXPLAINED_UV
     };
-    lamps
-        .iter()
-        .enumerate()
-        .any(|(i, a)| lamps[i..].iter().any(|b| near_segment(a.uv, b.uv)))
+    lamps.iter().enumerate().any(|(i, a)| {
+        lamps[i..].iter().any(|b| near_segment(a.uv, b.uv))
+            || windows.iter().any(|(w, _)| near_segment(a.uv, w.uv))
+    })
 }
 
 /// The index of the sun among the candidates, or why there is none.
@@ -673,10 +686,17 @@ fn lamp_light(
             m.why
         ),
     };
+    // The lamp itself: its brightest part (its glow and the surfaces round it are reflectors).
+    let lamp_cells: Vec<usize> =
+        c.e.cells
+            .iter()
+            .copied()
+            .filter(|&i| cells.y[i] as f64 >= LAMP_CORE * c.e.stats.peak)
+            .collect();
     let mut l = light_of(
         cells,
         levels,
-        c.e.core.clone(),
+        lamp_cells,
         LightKind::Lamp,
         c.colour,
         spd,

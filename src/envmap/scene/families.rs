@@ -6,8 +6,9 @@
 //! and low-pressure sodium, mercury and metal halide. Several families share whites (a 4000 K
 //! fluorescent tube, LED and metal-halide lamp lie within 0.002 of each other), so among the
 //! matches within [`AMBIGUITY_UV`] of the nearest, the shape decides as a lighting designer would:
-//! a long strip is a fluorescent (or LED) tube; a compact source on the Planckian locus between
-//! 2400 and 3600 K is a filament; otherwise the nearest wins. The match says how near it is and what else was near.
+//! a warm white below 2400 K is sodium; a long strip is a fluorescent tube; a compact source on
+//! the Planckian locus between 2400 and 3600 K is a filament, another compact one a white LED;
+//! within a family, the kind most common in lighting today; otherwise the nearest wins. The match says how near it is and what else was near.
 
 use crate::colorimetry::{planck, Cmfs, Observer, Xyz};
 use crate::data;
@@ -43,41 +44,53 @@ impl Family {
     }
 }
 
-/// The tables lamps are matched against (built-in names) and their families. Measured lamps of
-/// spectra/light/ that are not listed here are left out on purpose: the truth scenes of
-/// tools/make_truth.py are lit by them, so a good score cannot come from recognising a table.
-pub const CATALOGUE: [(&str, Family); 30] = [
-    ("FL1", Family::Fluorescent),
-    ("FL2", Family::Fluorescent),
-    ("FL3", Family::Fluorescent),
-    ("FL4", Family::Fluorescent),
-    ("FL5", Family::Fluorescent),
-    ("FL6", Family::Fluorescent),
-    ("FL7", Family::Fluorescent),
-    ("FL8", Family::Fluorescent),
-    ("FL9", Family::Fluorescent),
-    ("FL10", Family::Fluorescent),
-    ("FL11", Family::Fluorescent),
-    ("FL12", Family::Fluorescent),
-    ("LED-B1", Family::Led),
-    ("LED-B2", Family::Led),
-    ("LED-B3", Family::Led),
-    ("LED-B4", Family::Led),
-    ("LED-B5", Family::Led),
-    ("LED-BH1", Family::Led),
-    ("LED-RGB1", Family::Led),
-    ("LED-V1", Family::Led),
-    ("LED-V2", Family::Led),
-    ("HP1", Family::HighPressureSodium),
-    ("HP2", Family::HighPressureSodium),
-    ("hps", Family::HighPressureSodium),
-    ("lps", Family::LowPressureSodium),
-    ("mercury", Family::Mercury),
-    ("HP3", Family::MetalHalide),
-    ("HP4", Family::MetalHalide),
-    ("HP5", Family::MetalHalide),
-    ("metal-halide", Family::MetalHalide),
+/// The tables lamps are matched against (built-in names), their families, and how common each
+/// kind is in lighting today (0: the usual choice; 1: less common; 2: legacy or special), which
+/// decides among near whites of one family: a 4000 K tube is far likelier a triphosphor (F10-F12)
+/// than a halophosphate (F1-F6) one, a white LED a phosphor-converted (B series) than an RGB mix.
+/// The ranks follow what a wrong pick costs, measured as the ColorChecker's mean CIEDE2000 under
+/// one lamp against another (CAT02 to D65; `tools/lamp_rendition.py`): a measured 100 W sodium
+/// lamp (c100s54) is 0.5 from `hps` and 0.8 from CIE HP1; a 4100 K triphosphor tube (f32t8-tl841)
+/// 0.6 from FL11 and 3.1 from the halophosphate FL6; a warm phosphor LED (luxeon-ww-2880) 1.3 to
+/// 1.9 from LED-V1 and LED-B1 and 3.9 from the RGB-mixed LED-RGB1, which is left out (RGB-mixed
+/// white LEDs light stages, not rooms). Measured lamps of spectra/light/ that are not listed here
+/// are left out on purpose: the truth scenes of tools/make_truth.py are lit by them, so a good
+/// score cannot come from recognising a table.
+pub const CATALOGUE: [(&str, Family, u8); 29] = [
+    ("FL1", Family::Fluorescent, 2),
+    ("FL2", Family::Fluorescent, 2),
+    ("FL3", Family::Fluorescent, 2),
+    ("FL4", Family::Fluorescent, 2),
+    ("FL5", Family::Fluorescent, 2),
+    ("FL6", Family::Fluorescent, 2),
+    ("FL7", Family::Fluorescent, 1),
+    ("FL8", Family::Fluorescent, 1),
+    ("FL9", Family::Fluorescent, 1),
+    ("FL10", Family::Fluorescent, 0),
+    ("FL11", Family::Fluorescent, 0),
+    ("FL12", Family::Fluorescent, 0),
+    ("LED-B1", Family::Led, 0),
+    ("LED-B2", Family::Led, 0),
+    ("LED-B3", Family::Led, 0),
+    ("LED-B4", Family::Led, 0),
+    ("LED-B5", Family::Led, 0),
+    ("LED-BH1", Family::Led, 1),
+    ("LED-V1", Family::Led, 1),
+    ("LED-V2", Family::Led, 1),
+    ("HP1", Family::HighPressureSodium, 1),
+    ("HP2", Family::HighPressureSodium, 1),
+    ("hps", Family::HighPressureSodium, 0),
+    ("lps", Family::LowPressureSodium, 0),
+    ("mercury", Family::Mercury, 1),
+    ("HP3", Family::MetalHalide, 1),
+    ("HP4", Family::MetalHalide, 1),
+    ("HP5", Family::MetalHalide, 1),
+    ("metal-halide", Family::MetalHalide, 0),
 ];
+
+/// Below this a warm white on the locus near a sodium table is high-pressure sodium, the
+/// likelier lamp than a filament at a candle's temperature.
+pub const SODIUM_BELOW_K: f64 = 2400.0;
 
 /// The Planckian temperatures of the catalogue's filament (a candle's 1500 K to a halogen's
 /// 3600 K).
@@ -99,6 +112,7 @@ pub const STRIP_ELONGATION: f64 = 3.0;
 struct Entry {
     name: &'static str,
     family: Family,
+    rank: u8,
     uv: [f64; 2],
 }
 
@@ -110,7 +124,7 @@ fn entries() -> &'static [Entry] {
         let cmfs = Cmfs::new(Observer::Cie1931, &grid).expect("built-in CMFs");
         CATALOGUE
             .iter()
-            .map(|&(name, family)| {
+            .map(|&(name, family, rank)| {
                 let s = data::spectrum(name)
                     .expect("a built-in table")
                     .data
@@ -119,7 +133,12 @@ fn entries() -> &'static [Entry] {
                     .light_xyz(&s, Rule::Riemann)
                     .expect("same grid")
                     .uv1960();
-                Entry { name, family, uv }
+                Entry {
+                    name,
+                    family,
+                    rank,
+                    uv,
+                }
             })
             .collect()
     })
@@ -148,51 +167,87 @@ pub struct LampMatch {
     pub alternatives: Vec<(String, f64)>,
 }
 
+/// A candidate white: name, family, prevalence rank, distance.
+type Near = (String, Family, u8, f64);
+
 /// Matches a lamp of colour `uv` (CIE 1960), correlated colour temperature `cct_k` (None far from
-/// the locus) and shape `elongation`.
+/// the locus) and shape `elongation`. Among the whites within [`AMBIGUITY_UV`] of the nearest, in
+/// order: a warm white below [`SODIUM_BELOW_K`] near a sodium table is sodium; a strip is the
+/// most common near fluorescent; a compact source between 2400 and 3600 K on the locus is a
+/// filament; a compact one near a white LED is the most common such LED; otherwise the nearest.
 pub fn match_lamp(uv: [f64; 2], cct_k: Option<f64>, elongation: f64) -> Result<LampMatch> {
     let dist = |a: [f64; 2]| (a[0] - uv[0]).hypot(a[1] - uv[1]);
-    let mut found: Vec<(String, Family, f64)> = entries()
+    let mut found: Vec<Near> = entries()
         .iter()
-        .map(|e| (e.name.to_string(), e.family, dist(e.uv)))
+        .map(|e| (e.name.to_string(), e.family, e.rank, dist(e.uv)))
         .collect();
     if let Some(k) = cct_k {
         let k = k.clamp(FILAMENT_K.0, FILAMENT_K.1);
-        found.push((
+        let planck = (
             format!("Planckian {k:.0} K"),
             Family::Incandescent,
+            0,
             dist(planckian_uv(k)),
-        ));
+        );
+        found.push(planck);
     }
-    found.sort_by(|a, b| a.2.total_cmp(&b.2));
-    let best = found[0].2;
-    let near: Vec<&(String, Family, f64)> = found
+    found.sort_by(|a, b| a.3.total_cmp(&b.3));
+    let best = found[0].3;
+    let near: Vec<&Near> = found
         .iter()
-        .filter(|f| f.2 <= best + AMBIGUITY_UV)
+        .filter(|f| f.3 <= best + AMBIGUITY_UV)
         .collect();
-    let strip = elongation >= STRIP_ELONGATION;
-    let warm =
-        cct_k.is_some_and(|k| (FILAMENT_PREFERRED_K.0..=FILAMENT_PREFERRED_K.1).contains(&k));
-    let pick = |family: Family| near.iter().find(|f| f.1 == family).copied();
-    let (chosen, why) = if let (true, Some(f)) = (strip, pick(Family::Fluorescent)) {
-        (f, "a strip: the nearest fluorescent white".to_string())
-    } else if let (false, true, Some(f)) = (strip, warm, pick(Family::Incandescent)) {
-        (
-            f,
-            "compact and on the Planckian locus: a filament".to_string(),
-        )
-    } else {
-        (near[0], "the nearest white".to_string())
+    // The most common of a family among the near whites, then the nearest.
+    let pick = |family: Family| {
+        near.iter()
+            .filter(|f| f.1 == family)
+            .min_by(|a, b| {
+                (a.2, a.3)
+                    .partial_cmp(&(b.2, b.3))
+                    .expect("finite distances")
+            })
+            .copied()
     };
+    let strip = elongation >= STRIP_ELONGATION;
+    let k = cct_k.unwrap_or(f64::NAN);
+    let filament = (FILAMENT_PREFERRED_K.0..=FILAMENT_PREFERRED_K.1).contains(&k);
+    let rules: [(bool, Family, &str); 4] = [
+        (
+            k < SODIUM_BELOW_K,
+            Family::HighPressureSodium,
+            "a warm white near sodium's",
+        ),
+        (
+            strip,
+            Family::Fluorescent,
+            "a strip: the most common near fluorescent",
+        ),
+        (
+            !strip && filament,
+            Family::Incandescent,
+            "compact and on the Planckian locus: a filament",
+        ),
+        (
+            !strip,
+            Family::Led,
+            "compact: the most common near white LED",
+        ),
+    ];
+    let (chosen, why) = rules
+        .iter()
+        .find_map(|&(applies, family, why)| {
+            applies.then(|| pick(family)).flatten().map(|f| (f, why))
+        })
+        .unwrap_or((near[0], "the nearest white"));
     Ok(LampMatch {
         spd: chosen.0.clone(),
         family: chosen.1,
-        distance_uv: chosen.2,
-        why,
+        distance_uv: chosen.3,
+        why: why.to_string(),
         alternatives: near
             .iter()
             .filter(|f| f.0 != chosen.0)
-            .map(|f| (f.0.clone(), f.2))
+            .map(|f| (f.0.clone(), f.3))
             .collect(),
     })
 }
@@ -207,7 +262,7 @@ mod tests {
 
     #[test]
     fn a_tables_own_white_matches_that_table_or_a_near_twin() {
-        for (name, family) in CATALOGUE {
+        for (name, family, _) in CATALOGUE {
             let m = match_lamp(uv_of(name), None, 1.0).unwrap();
             assert!(m.distance_uv <= AMBIGUITY_UV, "{name}: {m:?}");
             assert!(
@@ -222,13 +277,22 @@ mod tests {
 
     #[test]
     fn shape_decides_among_near_whites() {
-        // A warm white on the locus: compact, a filament; a strip, a fluorescent tube.
+        // A warm white on the locus: compact, a filament; a strip, a triphosphor tube.
         let uv = planckian_uv(3000.0);
         let spot = match_lamp(uv, Some(3000.0), 1.0).unwrap();
         assert_eq!(spot.family, Family::Incandescent, "{spot:?}");
         assert_eq!(spot.spd, "Planckian 3000 K");
         let tube = match_lamp(uv, Some(3000.0), 8.0).unwrap();
-        assert_eq!(tube.family, Family::Fluorescent, "{tube:?}");
+        assert_eq!(tube.spd, "FL12", "{tube:?}");
+        // A 4000 K tube is triphosphor, a 4000 K spot an LED, a 2000 K white sodium.
+        let uv = uv_of("FL11");
+        assert_eq!(match_lamp(uv, Some(4000.0), 8.0).unwrap().spd, "FL11");
+        assert_eq!(
+            match_lamp(uv, Some(4000.0), 1.0).unwrap().family,
+            Family::Led
+        );
+        let m = match_lamp(planckian_uv(1970.0), Some(1970.0), 1.0).unwrap();
+        assert_eq!(m.family, Family::HighPressureSodium, "{m:?}");
         // Planckian uv agrees with the table of illuminant A (a 2856 K black body).
         let a = planckian_uv(2856.0);
         let d = {

@@ -1,0 +1,231 @@
+//! One OpenEXR scan-line block encoded from lines of samples: each channel's scan line is asked
+//! of a [`LineSource`] in file order, checked, scaled, converted to half (F16C where the CPU has
+//! it) and laid out as the compressor wants it; for ZIP that is the predictor's byte split
+//! directly (low bytes of every half sample, then high bytes), so no planar or interleaved copy
+//! of the block is ever made. The scratch buffers live in a [`BlockEncoder`], one per thread.
+
+use super::exrio::{Compression, HALF_MAX};
+use super::zip::ZipEncoder;
+use crate::error::{Error, Result};
+use exr::block::chunk::{Chunk, CompressedBlock, CompressedScanLineBlock};
+use exr::block::{BlockIndex, UncompressedBlock};
+use exr::math::Vec2;
+use exr::prelude::f16;
+use half::slice::HalfFloatSliceExt;
+use std::path::Path;
+
+/// Rows of an image, one scan line of one channel at a time.
+pub trait LineSource: Sync {
+    /// Writes channel `channel` (in the caller's per-pixel order) of row `row` (counted from the
+    /// first row the source holds) into `out`, one value per pixel.
+    fn line(&self, channel: usize, row: usize, out: &mut [f32]);
+}
+
+/// Rows of pixels with `per_pixel` interleaved values each (the caller's order).
+pub struct Interleaved<'a> {
+    pub rows: &'a [f32],
+    pub width: usize,
+    pub per_pixel: usize,
+}
+
+impl LineSource for Interleaved<'_> {
+    fn line(&self, channel: usize, row: usize, out: &mut [f32]) {
+        let start = row * self.width * self.per_pixel;
+        let row = &self.rows[start..start + self.width * self.per_pixel];
+        for (o, px) in out.iter_mut().zip(row.chunks_exact(self.per_pixel)) {
+            *o = px[channel];
+        }
+    }
+}
+
+/// What every block of a file shares.
+pub struct BlockFormat<'a> {
+    pub dest: &'a Path,
+    pub width: usize,
+    /// For each channel in file order: its index in the caller's per-pixel order.
+    pub file_order: &'a [usize],
+    /// Channel names in the caller's order (for errors).
+    pub names: &'a [String],
+    pub half: bool,
+    /// Every value is multiplied by this (2^-EV) before it is stored...
+    pub scale: f32,
+    /// ...but in the channels (file order) whose scale here is 1: masks stay 0/1.
+    pub scales: &'a [f32],
+    pub compression: Compression,
+    pub lines_per_block: usize,
+    /// The file's header, for the `exr` crate's compressors.
+    pub headers: &'a exr::meta::Headers,
+}
+
+/// A compressed block and its index in increasing-y order.
+pub type Encoded = (usize, Chunk);
+
+/// Per-thread scratch: the compressor, one scan line as f32 and as half, the block's bytes.
+pub struct BlockEncoder {
+    zip: ZipEncoder,
+    line: Vec<f32>,
+    halves: Vec<f16>,
+    bytes: Vec<u8>,
+}
+
+impl BlockEncoder {
+    pub fn new(zip_level: u8) -> BlockEncoder {
+        BlockEncoder {
+            zip: ZipEncoder::new(zip_level),
+            line: Vec::new(),
+            halves: Vec::new(),
+            bytes: Vec::new(),
+        }
+    }
+
+    /// Encodes rows `row0..row0 + lines` of `src` as the block that starts at image row
+    /// `block_y`. Fails on a value that is not finite or, after the scale, beyond the sample
+    /// type's range, naming the pixel, channel and value.
+    pub fn encode(
+        &mut self,
+        f: &BlockFormat,
+        src: &dyn LineSource,
+        row0: usize,
+        block_y: usize,
+        lines: usize,
+    ) -> Result<Encoded> {
+        let w = f.width;
+        let bytes_per = if f.half { 2 } else { 4 };
+        let n = lines * f.file_order.len() * w * bytes_per;
+        self.line.resize(w, 0.0);
+        self.halves.resize(if f.half { w } else { 0 }, f16::ZERO);
+        self.bytes.resize(n, 0);
+        let zip = matches!(f.compression, Compression::Zip | Compression::Zips);
+        // The exr crate's compressors take native-endian samples; the file holds little-endian.
+        let native = !matches!(f.compression, Compression::None) && !zip;
+        let mut at = 0;
+        for l in 0..lines {
+            for (&c, &scale) in f.file_order.iter().zip(f.scales) {
+                src.line(c, row0 + l, &mut self.line);
+                check_line(f, &self.line, block_y + l, c)?;
+                if scale != 1.0 {
+                    self.line.iter_mut().for_each(|v| *v *= scale);
+                }
+                if f.half && zip {
+                    // The ZIP predictor's split: the low bytes of every sample in the first
+                    // half of the block, the high bytes in the second.
+                    self.halves.convert_from_f32_slice(&self.line);
+                    let (low, high) = self.bytes.split_at_mut(n / 2);
+                    for ((lo, hi), h) in low[at..at + w]
+                        .iter_mut()
+                        .zip(&mut high[at..at + w])
+                        .zip(&self.halves)
+                    {
+                        let b = h.to_bits();
+                        *lo = b as u8;
+                        *hi = (b >> 8) as u8;
+                    }
+                    at += w;
+                } else {
+                    let dst = &mut self.bytes[at..at + w * bytes_per];
+                    if f.half {
+                        self.halves.convert_from_f32_slice(&self.line);
+                        for (d, v) in dst.chunks_exact_mut(2).zip(&self.halves) {
+                            let b = if native {
+                                v.to_ne_bytes()
+                            } else {
+                                v.to_le_bytes()
+                            };
+                            d.copy_from_slice(&b);
+                        }
+                    } else {
+                        for (d, v) in dst.chunks_exact_mut(4).zip(&self.line) {
+                            let b = if native {
+                                v.to_ne_bytes()
+                            } else {
+                                v.to_le_bytes()
+                            };
+                            d.copy_from_slice(&b);
+                        }
+                    }
+                    at += w * bytes_per;
+                }
+            }
+        }
+        let index = block_y / f.lines_per_block;
+        let compressed_pixels_le = match f.compression {
+            // Handed over whole: the next block allocates its own.
+            Compression::None => std::mem::take(&mut self.bytes),
+            Compression::Zip | Compression::Zips if f.half => self.zip.encode_split(&self.bytes),
+            Compression::Zip | Compression::Zips => self.zip.encode(&self.bytes),
+            _ => return self.compress_with_exr(f, index, block_y, lines),
+        };
+        let chunk = Chunk {
+            layer_index: 0,
+            compressed_block: CompressedBlock::ScanLine(CompressedScanLineBlock {
+                y_coordinate: block_y as i32,
+                compressed_pixels_le,
+            }),
+        };
+        Ok((index, chunk))
+    }
+
+    /// The other compressions, by the `exr` crate, from native-endian samples.
+    fn compress_with_exr(
+        &mut self,
+        f: &BlockFormat,
+        index: usize,
+        block_y: usize,
+        lines: usize,
+    ) -> Result<Encoded> {
+        let block = UncompressedBlock {
+            index: BlockIndex {
+                layer: 0,
+                pixel_position: Vec2(0, block_y),
+                pixel_size: Vec2(f.width, lines),
+                level: Vec2(0, 0),
+            },
+            data: self.bytes.clone(),
+        };
+        let chunk = block.compress_to_chunk(f.headers).map_err(|e| {
+            Error::invalid(format!(
+                "{}: compressing rows {block_y}..{} failed: {e}",
+                f.dest.display(),
+                block_y + lines
+            ))
+        })?;
+        Ok((index, chunk))
+    }
+}
+
+/// Fails on the first value of a scan line that is not finite or, after the scale, beyond the
+/// sample type's range (one pass without branches; the search only when one is found).
+fn check_line(f: &BlockFormat, line: &[f32], y: usize, channel: usize) -> Result<()> {
+    let limit = if f.half { HALF_MAX } else { f32::MAX };
+    // NaN compares false: `<=` then negated catches it with the rest, without a branch.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
+    let bad = |v: f32| !((v * f.scale).abs() <= limit);
+    if !line.iter().fold(false, |b, &v| b | bad(v)) {
+        return Ok(());
+    }
+    let x = line.iter().position(|&v| bad(v)).unwrap_or(0);
+    Err(value_error(f, line[x], x, y, channel))
+}
+
+/// The error for a value the file cannot hold.
+pub fn value_error(f: &BlockFormat, v: f32, x: usize, y: usize, channel: usize) -> Error {
+    let why = if !v.is_finite() {
+        "is not finite".to_string()
+    } else if f.half {
+        format!(
+            "exceeds the half-float range (65504){}; write float or set an EV scale",
+            if f.scale != 1.0 {
+                " after the EV scale"
+            } else {
+                ""
+            }
+        )
+    } else {
+        "exceeds the float range after the EV scale".to_string()
+    };
+    Error::invalid(format!(
+        "{}: pixel ({x}, {y}) channel {}: value {v} {why}",
+        f.dest.display(),
+        f.names[channel]
+    ))
+}

@@ -1,0 +1,66 @@
+#!/usr/bin/env python3
+"""How much a wrong lamp costs: the 24 ColorChecker patches (Ohta) under one lamp against under
+another, each adapted from its own white to D65 by CAT02 (as `specmap rendition` does), mean
+CIEDE2000, all with colour-science. The ranks of src/envmap/scene/families.rs come from this.
+
+    .venv/bin/python tools/lamp_rendition.py
+"""
+import csv
+import pathlib
+import warnings
+
+import numpy as np
+
+warnings.filterwarnings("ignore")
+import colour  # noqa: E402
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+SHAPE = colour.SpectralShape(380, 780, 5)
+CMFS = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].copy().align(SHAPE)
+PATCHES = colour.SDS_COLOURCHECKERS["ColorChecker N Ohta"]
+D65 = colour.xy_to_XYZ([0.3127, 0.3290])
+
+
+def table(kind, name):
+    rows = list(csv.reader(open(ROOT / "spectra" / kind / f"{name}.csv")))
+    d = np.array([[float(v) for v in r[:2]] for r in rows[1:]])
+    return colour.SpectralDistribution(dict(zip(d[:, 0], d[:, 1]))).copy().align(SHAPE)
+
+
+def labs(light):
+    one = colour.SpectralDistribution(dict(zip(light.wavelengths, np.ones(len(light.wavelengths)))))
+    white = colour.sd_to_XYZ(one, CMFS, light) / 100
+    out = []
+    for p in PATCHES.values():
+        xyz = colour.sd_to_XYZ(p.copy().align(SHAPE), CMFS, light) / 100
+        adapted = colour.adaptation.chromatic_adaptation_VonKries(xyz, white, D65, transform="CAT02")
+        out.append(colour.XYZ_to_Lab(adapted))
+    return np.array(out)
+
+
+GROUPS = {
+    "sodium": (["c100s54", "c100s54c", "super-hps", "sdw-t-100w-lv"],
+               [("light", "hps"), ("illuminant", "HP1"), ("illuminant", "HP2")]),
+    "warm LED": (["luxeon-ww-2880", "phos-1", "phos-3", "4-led-1"],
+                 [("illuminant", n) for n in ("LED-B1", "LED-B2", "LED-BH1", "LED-V1", "LED-RGB1")]),
+    "4000 K": (["f32t8-tl841", "tl84", "t8-polylux-4000", "cool-white-fl", "mhc100-u-mp-4k"],
+               [("illuminant", n) for n in ("FL11", "FL9", "FL6", "FL2", "LED-B3", "HP4")]
+               + [("light", "mercury")]),
+}
+
+
+def main():
+    for group, (measured, catalogue) in GROUPS.items():
+        print(f"## {group}: mean CIEDE2000, measured lamp (row) against catalogue table (column)")
+        print("| lamp | " + " | ".join(n for _, n in catalogue) + " |")
+        print("|---|" + "---:|" * len(catalogue))
+        refs = [labs(table(k, n)) for k, n in catalogue]
+        for m in measured:
+            lab = labs(table("light", m))
+            de = [colour.delta_E(lab, r, method="CIE 2000").mean() for r in refs]
+            print(f"| {m} | " + " | ".join(f"{v:.2f}" for v in de) + " |")
+        print()
+
+
+if __name__ == "__main__":
+    main()
