@@ -180,6 +180,69 @@ pub struct RgbSpace {
 pub const D65_XY: [f64; 2] = [0.3127, 0.3290];
 /// The ACES white (about 6000 K).
 pub const ACES_WHITE_XY: [f64; 2] = [0.32168, 0.33767];
+/// CIE D50 as ICC's profile connection space defines it.
+pub const D50_XY: [f64; 2] = [0.3457, 0.3585];
+
+/// Whites with a name, for reports.
+const NAMED_WHITES: [(&str, [f64; 2]); 3] = [
+    ("D65", D65_XY),
+    ("ACES white", ACES_WHITE_XY),
+    ("D50", D50_XY),
+];
+
+/// Declared chromaticities within this of a named space's (each coordinate) are that space (see
+/// [`Chromaticities::same_as`]).
+const SAME_CHROMATICITY: f64 = 5e-5;
+
+/// The primaries and white of an RGB space in CIE 1931 xy, as OpenEXR's `chromaticities`
+/// attribute holds them.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Chromaticities {
+    pub red: [f64; 2],
+    pub green: [f64; 2],
+    pub blue: [f64; 2],
+    pub white: [f64; 2],
+}
+
+impl Chromaticities {
+    fn all(&self) -> [[f64; 2]; 4] {
+        [self.red, self.green, self.blue, self.white]
+    }
+    /// Whether these are `other`'s, to 5e-5 in each coordinate (OpenEXR stores them as f32,
+    /// and files round the published values differently).
+    pub fn same_as(&self, other: &Chromaticities) -> bool {
+        self.all()
+            .iter()
+            .flatten()
+            .zip(other.all().iter().flatten())
+            .all(|(a, b)| (a - b).abs() <= SAME_CHROMATICITY)
+    }
+}
+
+impl std::fmt::Display for Chromaticities {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let xy = |p: [f64; 2]| format!("({:.4}, {:.4})", p[0], p[1]);
+        write!(
+            f,
+            "R {} G {} B {} white {}",
+            xy(self.red),
+            xy(self.green),
+            xy(self.blue),
+            white_name(self.white)
+        )
+    }
+}
+
+/// A white in words: its name when it has one (to 5e-5), and its xy.
+pub fn white_name(xy: [f64; 2]) -> String {
+    let coords = format!("x {:.5}, y {:.5}", xy[0], xy[1]);
+    match NAMED_WHITES.iter().find(|(_, w)| {
+        (w[0] - xy[0]).abs() <= SAME_CHROMATICITY && (w[1] - xy[1]).abs() <= SAME_CHROMATICITY
+    }) {
+        Some((name, _)) => format!("{name} ({coords})"),
+        None => coords,
+    }
+}
 
 impl RgbSpace {
     /// IEC 61966-2-1 sRGB / Rec.709 primaries, D65; the matrix derived exactly.
@@ -221,6 +284,66 @@ impl RgbSpace {
         white: D65_XY,
         fixed_from_xyz: None,
     };
+
+    /// The name of a space of declared chromaticities that are no named space's.
+    pub const DECLARED: &'static str = "declared";
+
+    /// The space of declared chromaticities (OpenEXR's `chromaticities` attribute): the named
+    /// space whose primaries and white they are (to 5e-5), otherwise a space of them named
+    /// [`RgbSpace::DECLARED`]. An error when they make no RGB space: a coordinate not finite,
+    /// a y not positive, collinear primaries, or a white that is not a positive mix of them.
+    pub fn from_chromaticities(c: Chromaticities) -> Result<RgbSpace> {
+        if let Some(s) = RgbSpace::ALL
+            .into_iter()
+            .find(|s| s.chromaticities().same_as(&c))
+        {
+            return Ok(s);
+        }
+        let bad = |why: &str| Err(Error::invalid(format!("chromaticities {c}: {why}")));
+        if !c.all().iter().flatten().all(|v| v.is_finite()) {
+            return bad("a coordinate is not a finite number");
+        }
+        if !c
+            .all()
+            .iter()
+            .all(|p| p[1] > 0.0 && p[0] >= 0.0 && p[0] + p[1] <= 1.0)
+        {
+            return bad("a chromaticity lies outside 0 <= x, 0 < y, x + y <= 1");
+        }
+        let s = RgbSpace {
+            name: RgbSpace::DECLARED,
+            primaries: [c.red, c.green, c.blue],
+            white: c.white,
+            fixed_from_xyz: None,
+        };
+        let col = |xy: [f64; 2]| Vector3::new(xy[0] / xy[1], 1.0, (1.0 - xy[0] - xy[1]) / xy[1]);
+        let p = Matrix3::from_columns(&[col(c.red), col(c.green), col(c.blue)]);
+        match p.try_inverse().map(|inv| inv * col(c.white)) {
+            Some(scale) if p.determinant().abs() > 1e-9 => {
+                if scale.iter().all(|&v| v > 0.0) {
+                    Ok(s)
+                } else {
+                    bad("the white is not a positive mix of the primaries")
+                }
+            }
+            _ => bad("the primaries are collinear (they span no colour space)"),
+        }
+    }
+
+    /// The space's primaries and white.
+    pub fn chromaticities(&self) -> Chromaticities {
+        Chromaticities {
+            red: self.primaries[0],
+            green: self.primaries[1],
+            blue: self.primaries[2],
+            white: self.white,
+        }
+    }
+
+    /// The white, RGB (1, 1, 1), in words (see [`white_name`]).
+    pub fn white_name(&self) -> String {
+        white_name(self.white)
+    }
 
     pub const ALL: [RgbSpace; 5] = [
         RgbSpace::SRGB,
@@ -538,6 +661,91 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn declared_chromaticities_name_their_space_or_make_one() {
+        // f32-rounded, as OpenEXR stores them: the named spaces.
+        let f32ed = |s: RgbSpace| {
+            let c = s.chromaticities();
+            let r = |p: [f64; 2]| p.map(|v| v as f32 as f64);
+            Chromaticities {
+                red: r(c.red),
+                green: r(c.green),
+                blue: r(c.blue),
+                white: r(c.white),
+            }
+        };
+        for s in [
+            RgbSpace::SRGB,
+            RgbSpace::ACESCG,
+            RgbSpace::REC2020,
+            RgbSpace::DISPLAY_P3,
+        ] {
+            assert_eq!(
+                RgbSpace::from_chromaticities(f32ed(s)).unwrap().name,
+                s.name
+            );
+        }
+        assert_eq!(
+            RgbSpace::ACESCG.white_name(),
+            "ACES white (x 0.32168, y 0.33767)"
+        );
+        // sRGB adapted to D50 by Bradford (the ICC sRGB profile's colorants): the xy of the
+        // columns of Lindbloom's published D50 sRGB matrix make a space of its own, whose matrix
+        // is that one.
+        let d50 = Chromaticities {
+            red: [0.648427, 0.330856],
+            green: [0.321142, 0.597873],
+            blue: [0.155883, 0.066041],
+            white: [0.345669, 0.358496],
+        };
+        let s = RgbSpace::from_chromaticities(d50).unwrap();
+        assert_eq!(s.name, RgbSpace::DECLARED);
+        assert!(s.white_name().starts_with("D50"), "{}", s.white_name());
+        let lindbloom = [
+            [0.4360747, 0.3850649, 0.1430804],
+            [0.2225045, 0.7168786, 0.0606169],
+            [0.0139322, 0.0971045, 0.7141733],
+        ];
+        let m = s.to_xyz_matrix();
+        for (r, row) in lindbloom.iter().enumerate() {
+            for (c, v) in row.iter().enumerate() {
+                assert!(
+                    (m[(r, c)] - v).abs() < 2e-6,
+                    "({r},{c}) {} vs {v}",
+                    m[(r, c)]
+                );
+            }
+        }
+        // RGB (1,1,1) is the declared white, unadapted.
+        let w = s.xyz_from_rgb([1.0; 3]);
+        let want = Xyz::from_xy(d50.white);
+        assert!((0..3).all(|k| (w.0[k] - want.0[k]).abs() < 1e-9), "{w:?}");
+        // What makes no space is refused, saying why.
+        let collinear = Chromaticities {
+            red: [0.2, 0.2],
+            green: [0.3, 0.3],
+            blue: [0.4, 0.4],
+            white: D65_XY,
+        };
+        let e = RgbSpace::from_chromaticities(collinear)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("collinear"), "{e}");
+        let outside = Chromaticities {
+            white: [0.05, 0.9],
+            ..d50
+        };
+        let e = RgbSpace::from_chromaticities(outside)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("positive mix"), "{e}");
+        let nan = Chromaticities {
+            red: [f64::NAN, 0.3],
+            ..d50
+        };
+        assert!(RgbSpace::from_chromaticities(nan).is_err());
     }
 
     #[test]

@@ -79,6 +79,10 @@ pub struct Fit {
     pub observer: Observer,
     pub rule: Rule,
     pub space: String,
+    /// The primaries and white of a space without a name (`space` is "declared": the input
+    /// file's own chromaticities); absent for the named spaces.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub chromaticities: Option<crate::colorimetry::Chromaticities>,
     /// The paper's w_R, w_G, w_B.
     pub weights: [f64; 3],
     /// Coefficients a = W rgb (row-major): diag(weights) in paper mode.
@@ -427,6 +431,8 @@ pub fn fit(input: &FitInput, mode: Mode) -> Result<Fit> {
         observer: input.observer,
         rule: input.rule,
         space: input.space.name.to_string(),
+        chromaticities: (input.space.name == RgbSpace::DECLARED)
+            .then(|| input.space.chromaticities()),
         weights: w.into(),
         matrix: to_rows(&matrix),
         light_rgb: t.into(),
@@ -490,14 +496,33 @@ impl Fit {
         if !fit.is_finite() {
             return Err(parse_err("the fit holds non-finite numbers".into()));
         }
-        if RgbSpace::ALL.iter().all(|s| s.name != fit.space) {
-            return Err(parse_err(format!("unknown colour space '{}'", fit.space)));
+        match (fit.space.as_str(), fit.chromaticities) {
+            (RgbSpace::DECLARED, Some(c)) => {
+                RgbSpace::from_chromaticities(c).map_err(|e| parse_err(e.to_string()))?;
+            }
+            (RgbSpace::DECLARED, None) => {
+                return Err(parse_err(
+                    "the space is \"declared\" but the fit has no \"chromaticities\"".into(),
+                ))
+            }
+            (name, _) if RgbSpace::ALL.iter().all(|s| s.name != name) => {
+                return Err(parse_err(format!("unknown colour space '{name}'")));
+            }
+            _ => {}
         }
         Ok(fit)
     }
 
     /// The colour space the fit was solved in.
     pub fn rgb_space(&self) -> RgbSpace {
+        if let Some(c) = self
+            .chromaticities
+            .filter(|_| self.space == RgbSpace::DECLARED)
+        {
+            if let Ok(s) = RgbSpace::from_chromaticities(c) {
+                return s;
+            }
+        }
         RgbSpace::ALL
             .into_iter()
             .find(|s| s.name == self.space)

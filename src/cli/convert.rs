@@ -66,7 +66,8 @@ pub struct ConvertOptionArgs {
     #[arg(long, value_name = "W", default_value_t = specmap::envmap::scene::reflectors::LOCAL_PRIOR)]
     reflector_prior: f64,
     /// What RGB (1,1,1) is: `light` (the map is white-balanced to its main light, the paper's
-    /// premise), `d65` (D65-referenced: a sodium lamp looks orange), or `auto` (the brightest
+    /// premise), `space` (the RGB space's own white, unadapted: D65 for sRGB, ACES white for
+    /// ACEScg; a sodium lamp looks orange; `d65` is an old name of it), or `auto` (the brightest
     /// regions decide). Default: auto, except `light` for paper/exact/nonneg with a named light.
     #[arg(long, value_enum)]
     white: Option<WhiteArg>,
@@ -80,9 +81,11 @@ pub struct ConvertOptionArgs {
     /// How RGB becomes a spectrum.
     #[arg(long, value_enum, default_value_t = ConvertModeArg::Faithful)]
     mode: ConvertModeArg,
-    /// RGB space of the input.
-    #[arg(long, value_enum, default_value_t = SpaceArg::Srgb)]
-    space: SpaceArg,
+    /// RGB space of the input [default: the one the file's OpenEXR `chromaticities` attribute
+    /// declares, else srgb (OpenEXR's Rec.709 with D65)]. Given, it overrides the file's, with a
+    /// note when they differ.
+    #[arg(long, value_enum)]
+    space: Option<SpaceArg>,
     /// Find the sun and give its pixels their own SPD.
     #[arg(long, value_enum, default_value_t = SunArg::Auto)]
     sun: SunArg,
@@ -180,7 +183,8 @@ enum ConvertModeArg {
 #[derive(Debug, Clone, Copy, ValueEnum)]
 enum WhiteArg {
     Light,
-    D65,
+    #[value(alias = "d65")]
+    Space,
     Auto,
 }
 
@@ -304,10 +308,10 @@ impl ConvertOptionArgs {
                 },
                 ReflectorsArg::Global => ReflectorModel::Global,
             },
-            space: fit
-                .as_ref()
-                .map(|f| f.rgb_space())
-                .unwrap_or(a.space.into()),
+            space: a
+                .space
+                .map_or(specmap::colorimetry::RgbSpace::SRGB, Into::into),
+            space_overrides_file: a.space.is_some(),
             fit,
             mode: match a.mode {
                 ConvertModeArg::Paper => specmap::fit::Mode::Paper,
@@ -320,7 +324,7 @@ impl ConvertOptionArgs {
             },
             white: a.white.map(|w| match w {
                 WhiteArg::Light => WhiteSpec::Light,
-                WhiteArg::D65 => WhiteSpec::D65,
+                WhiteArg::Space => WhiteSpec::Space,
                 WhiteArg::Auto => WhiteSpec::Auto,
             }),
             sky: a.sky.map(|s| match s {
@@ -458,13 +462,14 @@ pub fn run(a: ConvertArgs) -> anyhow::Result<()> {
             r.sanitized.negative_kept
         );
     }
+    outln!(out, "  space        {}", space_text(&r.space));
     write_lights(&mut out, r);
     outln!(
         out,
         "  white        RGB (1,1,1) is {} ({})",
         match r.white.premise {
-            WhitePremise::Light => "the main light",
-            WhitePremise::D65 => "D65 white",
+            WhitePremise::Light => "the main light".to_string(),
+            WhitePremise::Space => format!("the space's white, {}, unadapted", r.space.white),
         },
         r.white.reason
     );
@@ -491,12 +496,18 @@ pub fn run(a: ConvertArgs) -> anyhow::Result<()> {
     outln!(out, "  output       {}", output_text(r));
     outln!(
         out,
-        "  round trip   CIEDE2000 energy-weighted mean {:.4}, max {:.4}; without the sun: mean \
-         {:.4}, max {:.4}",
-        r.roundtrip.weighted_mean_de2000,
-        r.roundtrip.max_de2000,
-        r.roundtrip_without_sun.weighted_mean_de2000,
-        r.roundtrip_without_sun.max_de2000
+        "  round trip   over {}",
+        super::floor_text(&r.roundtrip_floor)
+    );
+    outln!(
+        out,
+        "    all        {}",
+        super::round_trip_text(&r.roundtrip)
+    );
+    outln!(
+        out,
+        "    no sun     {}",
+        super::round_trip_text(&r.roundtrip_without_sun)
     );
     outln!(
         out,
@@ -568,21 +579,29 @@ fn write_spectra(out: &mut String, r: &convert::ConvertReport) {
         sp.daylight,
         sp.smooth,
         sp.colorchecker,
-        sp.nonneg,
+        sp.nonneg_fallback,
         sp.clipped,
         sp.nearest,
         sp.negative
     );
-    if r.inexact.pixels > 0 {
+    if r.inexact.pixels + r.inexact.below_floor.pixels > 0 {
         outln!(
             out,
-            "  inexact      {} pixels could not keep their colour: CIEDE2000 energy-weighted mean \
-             {:.3}, max {:.3}",
-            r.inexact.pixels,
-            r.inexact.weighted_mean_de2000,
-            r.inexact.max_de2000
+            "  inexact      could not keep their colour: {}",
+            super::round_trip_text(&r.inexact)
         );
     }
+}
+
+/// The space line of the report: the space, its primaries and white, and where it comes from.
+fn space_text(s: &specmap::envmap::input::SpaceChoice) -> String {
+    use specmap::envmap::input::SpaceSource;
+    let from = match s.source {
+        SpaceSource::File => "declared by the file's chromaticities",
+        SpaceSource::Given => "as asked",
+        SpaceSource::Default => "the file declares none: OpenEXR's Rec.709 primaries with D65",
+    };
+    format!("{} ({}; {from})", s.name, s.chromaticities)
 }
 
 /// The sun line of the report: where it is, how much energy, the SPD it was given.

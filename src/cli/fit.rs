@@ -151,7 +151,6 @@ pub fn run(a: FitArgs) -> anyhow::Result<()> {
             "regularized": f.regularized,
             "lost_information": f.lost_information,
             "light_rgb": f.light_rgb,
-            "closed_form": f.weights,
             "argmin": f.argmin,
             "roundtrip": rt,
             "pixel": pixel,

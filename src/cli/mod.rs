@@ -283,6 +283,37 @@ pub fn emit(text: &str) {
     }
 }
 
+/// One round-trip statistic in words (both `convert` and `roundtrip` print it).
+pub fn round_trip_text(s: &specmap::envmap::roundtrip_stats::RoundTripStats) -> String {
+    let at = s
+        .max_at
+        .map(|[x, y]| format!(" at ({x}, {y}), luminance {:.3e}", s.max_luminance))
+        .unwrap_or_default();
+    let mut t = format!(
+        "{} pixels: CIEDE2000 energy-weighted mean {:.4}, max {:.4}{at}",
+        s.pixels, s.weighted_mean_de2000, s.max_de2000
+    );
+    let b = &s.below_floor;
+    if b.pixels > 0 {
+        t += &format!(
+            "; {} below the floor (max {:.4}, {:.2e} of the energy)",
+            b.pixels, b.max_de2000, b.energy_share
+        );
+    }
+    if s.black_pixels > 0 {
+        t += &format!("; {} black", s.black_pixels);
+    }
+    t
+}
+
+/// The floor of the round-trip statistics in words.
+pub fn floor_text(f: &specmap::envmap::roundtrip_stats::Floor) -> String {
+    format!(
+        "pixels of luminance {:.3e} or more ({}, {:.3e})",
+        f.luminance, f.rule, f.reference_luminance
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::Cli;

@@ -99,7 +99,7 @@ pub fn run(a: RoundtripArgs) -> anyhow::Result<()> {
     let mut out = String::new();
     outln!(
         out,
-        "{}: {}x{}, {} wavelengths {}..{} nm, {}{}",
+        "{}: {}x{}, {} wavelengths {}..{} nm, {} ({}){}",
         r.file,
         r.width,
         r.height,
@@ -107,20 +107,18 @@ pub fn run(a: RoundtripArgs) -> anyhow::Result<()> {
         r.range_nm[0],
         r.range_nm[1],
         r.space,
+        r.chromaticities,
         r.white_balance
             .map(|t| format!(", white-balanced by the main light's RGB {t:.4?}"))
             .unwrap_or_default()
     );
+    outln!(
+        out,
+        "  statistic        over {}",
+        super::floor_text(&r.floor)
+    );
     for (name, s) in [("all pixels", &r.all), ("without the sun", &r.without_sun)] {
-        outln!(
-            out,
-            "  {name:<16} {} pixels: CIEDE2000 energy-weighted mean {:.4}, max {:.4} at ({}, {})",
-            s.pixels,
-            s.weighted_mean_de2000,
-            s.max_de2000,
-            s.max_at[0],
-            s.max_at[1]
-        );
+        outln!(out, "  {name:<16} {}", super::round_trip_text(s));
     }
     outln!(out, "  sun pixels       {}", r.sun_pixels);
     if r.non_finite_pixels > 0 {

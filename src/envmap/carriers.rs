@@ -315,7 +315,7 @@ impl CarrierEngine {
     pub fn white_balance(&self) -> [f64; 3] {
         match self.premise {
             WhitePremise::Light => self.balance.into(),
-            WhitePremise::D65 => [1.0; 3],
+            WhitePremise::Space => [1.0; 3],
         }
     }
 
@@ -328,14 +328,14 @@ impl CarrierEngine {
         let v = Vector3::new(rgb[0] as f64, rgb[1] as f64, rgb[2] as f64);
         match self.premise {
             WhitePremise::Light => v.component_mul(&self.balance),
-            WhitePremise::D65 => v,
+            WhitePremise::Space => v,
         }
     }
 
     fn back(&self, v: Vector3<f64>) -> [f64; 3] {
         match self.premise {
             WhitePremise::Light => v.component_div(&self.balance).into(),
-            WhitePremise::D65 => v.into(),
+            WhitePremise::Space => v.into(),
         }
     }
 
@@ -475,7 +475,7 @@ fn sun_spd(
                 carriers: vec![carrier],
                 daylight: None,
                 sun: None,
-                premise: WhitePremise::D65,
+                premise: WhitePremise::Space,
                 balance: Vector3::repeat(1.0),
                 metric: RgbMetric::new(&c.space),
                 to_xyz: c.space.to_xyz_matrix(),
@@ -606,7 +606,7 @@ mod tests {
             carriers,
             true,
             &SunSpec::None,
-            WhitePremise::D65,
+            WhitePremise::Space,
             [1.0; 3],
         )
         .unwrap()
@@ -673,7 +673,7 @@ mod tests {
             vec![carrier("D65", &c)],
             true,
             &SunSpec::Colour { rgb, cct_k: 1900.0 },
-            WhitePremise::D65,
+            WhitePremise::Space,
             [1.0; 3],
         )
         .unwrap();

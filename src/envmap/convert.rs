@@ -8,13 +8,14 @@ use crate::colorimetry::{Observer, RgbSpace};
 use crate::data;
 use crate::envmap::engine::WhitePremise;
 use crate::envmap::exrio::{self, AttrValue, Compression, Precision};
-use crate::envmap::input::{self, Sanitized};
+use crate::envmap::input::{self, Sanitized, SpaceChoice};
 use crate::envmap::layout::{EnvMap, Layout, Orientation};
 use crate::envmap::light::{LightChoice, WhiteChoice};
 use crate::envmap::plan::{self, Analysis, PixelPlan, Plan};
+use crate::envmap::roundtrip_stats::{Floor, RoundTripStats};
 use crate::envmap::scene::{Levels, Light, ReflectorModel, Reflectors, Scene};
 use crate::envmap::sun::SunSettings;
-use crate::envmap::write::{self, FileSettings, RoundTripStats, SpectraCount};
+use crate::envmap::write::{self, FileSettings, SpectraCount};
 use crate::error::{Error, Result};
 use crate::fit::{self, Fit, Mode};
 use crate::spectrum::{Rule, WavelengthGrid};
@@ -59,7 +60,8 @@ pub enum Method {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum WhiteSpec {
     Light,
-    D65,
+    /// The RGB space's own white.
+    Space,
     /// The brightest regions decide (see [`light::choose_white`]).
     Auto,
 }
@@ -115,7 +117,14 @@ pub struct ConvertOptions {
     pub white: Option<WhiteSpec>,
     /// None: the method's default (faithful: daylight; basis: light).
     pub sky: Option<SkySpd>,
+    /// The input's RGB space when the file declares none (OpenEXR's `chromaticities`; a file
+    /// without them is Rec.709 with D65, sRGB), or whatever it declares with
+    /// `space_overrides_file`. [`convert`] and [`inspect`] resolve it before the analysis (see
+    /// [`crate::envmap::input::SpaceChoice`]).
     pub space: RgbSpace,
+    /// `space` was asked for (`--space`, a fit's space): it replaces the file's chromaticities,
+    /// with a note when they differ.
+    pub space_overrides_file: bool,
     pub basis: [String; 3],
     pub observer: Observer,
     pub rule: Rule,
@@ -176,6 +185,7 @@ impl Default for ConvertOptions {
             white: None,
             sky: None,
             space: RgbSpace::SRGB,
+            space_overrides_file: false,
             basis: fit::PAPER_BASIS.map(String::from),
             observer: Observer::Cie1931,
             rule: Rule::Riemann,
@@ -277,6 +287,8 @@ pub struct ConvertReport {
     /// Pixels whose every value is below half's smallest positive value (written as 0).
     pub below_half: usize,
     pub sanitized: Sanitized,
+    /// The input's RGB space, and where it comes from.
+    pub space: SpaceChoice,
     /// Every light of the scene (see [`crate::envmap::scene::Light`]).
     pub lights: Vec<Light>,
     pub sun: SunReport,
@@ -300,7 +312,8 @@ pub struct ConvertReport {
     pub bright_reflectors: Vec<String>,
     pub spectra: SpectraCount,
     /// The round trip over the pixels whose spectrum could not reproduce their colour (the
-    /// nearest non-negative spectra, clipped lamp pixels; the sun aside).
+    /// nearest non-negative spectra, clipped lamp pixels, the paper mode's pixels but white; the
+    /// sun aside).
     pub inexact: RoundTripStats,
     /// What the conversion could not do as asked, in words.
     pub notes: Vec<String>,
@@ -310,7 +323,10 @@ pub struct ConvertReport {
     pub wavelengths_nm: Vec<f64>,
     pub channels: usize,
     pub bytes: u64,
-    /// Over all pixels, and over those not replaced by the sun's SPD.
+    /// The luminance floor of the round-trip statistics (see [`Floor`]).
+    pub roundtrip_floor: Floor,
+    /// Over all pixels, and over those not replaced by the sun's SPD (see
+    /// [`crate::envmap::roundtrip_stats`]: the statistic `specmap roundtrip` reports).
     pub roundtrip: RoundTripStats,
     pub roundtrip_without_sun: RoundTripStats,
     pub seconds_read: f64,
@@ -389,9 +405,22 @@ pub struct Inspection {
     pub scene: Scene,
 }
 
+/// Reads `input` and settles its RGB space (see [`input::SpaceChoice`]): the options every
+/// later stage sees have that space.
+fn read_input(input: &str, opts: &ConvertOptions) -> Result<(input::Input, ConvertOptions)> {
+    let read = input::read(input, opts)?;
+    let opts = ConvertOptions {
+        space: read.space.space,
+        space_overrides_file: true,
+        ..opts.clone()
+    };
+    Ok((read, opts))
+}
+
 /// Reads and analyses `input` and plans its conversion, writing nothing.
 pub fn inspect(input: &str, opts: &ConvertOptions) -> Result<Inspection> {
-    let mut read = input::read(input, opts)?;
+    let (mut read, opts) = read_input(input, opts)?;
+    let opts = &opts;
     let analysis = plan::analyse(&mut read, opts)?;
     let plan = plan::plan(&analysis, opts)?;
     let scene = analysis.scene;
@@ -426,9 +455,11 @@ pub fn convert(
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<ConvertReport> {
     check_before(input, output, opts)?;
-    let mut read = input::read(input, opts)?;
+    let (mut read, opts) = read_input(input, opts)?;
+    let opts = &opts;
     let analysis = plan::analyse(&mut read, opts)?;
     let mut plan = plan::plan(&analysis, opts)?;
+    plan.notes.extend(read.space.note.clone());
     let cells = &analysis.scene.cells;
     let precisions = write::precisions(&read.map, cells, &plan, opts.precision);
     plan.notes.extend(precisions.reason.clone());
@@ -465,6 +496,7 @@ pub fn convert(
         ev: precisions.ev,
         below_half: precisions.below_half,
         sanitized: read.sanitized,
+        space: read.space.clone(),
         lights: analysis.scene.lights.clone(),
         sun: SunReport::of(&analysis.scene),
         sun_spd: plan.sun_spd.clone(),
@@ -487,6 +519,7 @@ pub fn convert(
         wavelengths_nm: plan.grid.wavelengths_nm().collect(),
         channels: written.channels,
         bytes: written.bytes,
+        roundtrip_floor: written.roundtrip_floor,
         roundtrip: written.roundtrip,
         roundtrip_without_sun: written.roundtrip_without_sun,
         seconds_read: read.seconds,
@@ -520,6 +553,10 @@ fn attributes(analysis: &Analysis, plan: &Plan) -> Vec<(String, AttrValue)> {
         text("specmap.light", analysis.light.clone()),
         text("specmap.mode", mode_name(plan.method, fit.mode)),
         text("specmap.space", fit.space.clone()),
+        (
+            "chromaticities".into(),
+            AttrValue::Chromaticities(fit.rgb_space().chromaticities()),
+        ),
         text("specmap.observer", fit.observer.table_name().into()),
         text("specmap.basis", fit.basis.join(",")),
         floats("specmap.weights", fit.weights.map(|v| v as f32).to_vec()),
@@ -532,7 +569,7 @@ fn attributes(analysis: &Analysis, plan: &Plan) -> Vec<(String, AttrValue)> {
             "specmap.white",
             match premise {
                 WhitePremise::Light => "light",
-                WhitePremise::D65 => "d65",
+                WhitePremise::Space => "space",
             }
             .into(),
         ),
@@ -578,8 +615,9 @@ fn radiometry(premise: WhitePremise) -> &'static str {
             "relative radiance; Y = sum(L ybar) / sum(ybar); RGB (1,1,1) is the main light's SPD \
              at Y = 1"
         }
-        WhitePremise::D65 => {
-            "relative radiance; Y = sum(L ybar) / sum(ybar); RGB (1,1,1) is D65 white at Y = 1; \
+        WhitePremise::Space => {
+            "relative radiance; Y = sum(L ybar) / sum(ybar); RGB (1,1,1) is the RGB space's white \
+             (the chromaticities attribute's) at Y = 1; \
              each light's SPD has Y = 1"
         }
     }

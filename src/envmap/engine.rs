@@ -5,9 +5,12 @@
 //! `Y = sum(L ybar) / sum(ybar)`, and one global factor makes the main light's SPD have Y = 1.
 //!
 //! The white premise ([`WhitePremise`]) says what RGB (1,1,1) means: the main light (the paper's
-//! premise: the map is white-balanced to it) or D65 white (the map is D65-referenced, as a
-//! renderer or a camera in a fixed white balance writes it). Internally every pixel is first made
-//! D65-referenced ("true" RGB, `r`): `r = diag(RGB_light) rgb` under the light premise.
+//! premise: the map is white-balanced to it) or the RGB space's own white (D65 for sRGB, ACES
+//! white for ACEScg, the declared white of a file's chromaticities: the map is referenced to it,
+//! as a renderer or a camera in a fixed white balance writes it). Internally every pixel is first
+//! made referenced to the space's white ("true" RGB, `r`): `r = diag(RGB_light) rgb` under the
+//! light premise. No chromatic adaptation is applied: a pixel's spectrum has the XYZ the space's
+//! RGB -> XYZ matrix gives its true RGB.
 //!
 //! Three ways to make a spectrum of `r`, all linear and exact in RGB (one 3x3 solve each):
 //! - the ColorChecker basis of the paper, `sum a_j MCC_j * light` ([`crate::fit`]'s modes);
@@ -36,8 +39,10 @@ use nalgebra::{Matrix3, Vector3};
 pub enum WhitePremise {
     /// The main light's SPD (the paper: the map is white-balanced to its main light).
     Light,
-    /// D65 white (the map is referenced to D65 whatever lights it; a sodium lamp looks orange).
-    D65,
+    /// The RGB space's own white, unadapted (D65 for sRGB, Rec.2020 and Display P3; ACES white
+    /// for ACEScg; a file's declared white): the map is referenced to it whatever lights it, so
+    /// a sodium lamp looks orange.
+    Space,
 }
 
 /// What a pixel is, for choosing its spectrum.
@@ -381,7 +386,7 @@ impl Engine {
         let premise = |rgb: [f64; 3]| -> Vector3<f64> {
             match model.white {
                 WhitePremise::Light => Vector3::from(rgb).component_mul(&light_rgb),
-                WhitePremise::D65 => Vector3::from(rgb),
+                WhitePremise::Space => Vector3::from(rgb),
             }
         };
         let sun = match sun_source {
@@ -495,7 +500,7 @@ impl Engine {
     pub fn white_balance(&self) -> [f64; 3] {
         match self.model.white {
             WhitePremise::Light => self.light_rgb.into(),
-            WhitePremise::D65 => [1.0; 3],
+            WhitePremise::Space => [1.0; 3],
         }
     }
 
@@ -514,7 +519,7 @@ impl Engine {
         let rgb = [rgb[0] as f64, rgb[1] as f64, rgb[2] as f64];
         match self.model.white {
             WhitePremise::Light => rgb,
-            WhitePremise::D65 => [
+            WhitePremise::Space => [
                 rgb[0] / self.light_rgb[0],
                 rgb[1] / self.light_rgb[1],
                 rgb[2] / self.light_rgb[2],
@@ -527,7 +532,7 @@ impl Engine {
         let v = Vector3::new(rgb[0] as f64, rgb[1] as f64, rgb[2] as f64);
         match self.model.white {
             WhitePremise::Light => v.component_mul(&self.light_rgb),
-            WhitePremise::D65 => v,
+            WhitePremise::Space => v,
         }
     }
 
@@ -556,7 +561,7 @@ impl Engine {
         let premise_back = |back: Vector3<f64>| -> [f64; 3] {
             match self.model.white {
                 WhitePremise::Light => back.component_div(&self.light_rgb).into(),
-                WhitePremise::D65 => back.into(),
+                WhitePremise::Space => back.into(),
             }
         };
         if kind == PixelKind::Sun {
@@ -666,7 +671,7 @@ mod tests {
     }
 
     const FAITHFUL: Model = Model {
-        white: WhitePremise::D65,
+        white: WhitePremise::Space,
         sky_daylight: true,
         smooth: true,
     };

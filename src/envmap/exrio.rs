@@ -2,6 +2,7 @@
 
 use super::block::{BlockEncoder, BlockFormat, Encoded, Interleaved, LineSource};
 use super::RgbImage;
+use crate::colorimetry::Chromaticities;
 use crate::error::{Error, Result};
 use exr::block::chunk::TileCoordinates;
 use exr::block::reader::ChunksReader;
@@ -69,6 +70,9 @@ pub struct InputImage {
     pub envmap: Option<EnvmapAttr>,
     /// A one-line description, e.g. "OpenEXR, DWAB, half, channels R,G,B".
     pub description: String,
+    /// The primaries and white the file declares (OpenEXR's `chromaticities` attribute; `None`
+    /// when absent, which OpenEXR reads as Rec.709 with D65, and for HDR files).
+    pub chromaticities: Option<Chromaticities>,
 }
 
 fn parse_err(path: &Path, message: impl Into<String>) -> Error {
@@ -163,6 +167,7 @@ fn read_hdr(path: &Path) -> Result<InputImage> {
         },
         envmap: None,
         description: "Radiance HDR (RGBE)".into(),
+        chromaticities: None,
     })
 }
 
@@ -424,6 +429,20 @@ fn read_exr_rgb(path: &Path, layer: Option<&str>) -> Result<InputImage> {
         image,
         envmap: envmap_of(header),
         description,
+        chromaticities: chromaticities_of(header),
+    })
+}
+
+/// The header's `chromaticities` attribute (shared by all parts of a file).
+fn chromaticities_of(header: &Header) -> Option<Chromaticities> {
+    header.shared_attributes.chromaticities.map(|c| {
+        let xy = |v: Vec2<f32>| [v.0 as f64, v.1 as f64];
+        Chromaticities {
+            red: xy(c.red),
+            green: xy(c.green),
+            blue: xy(c.blue),
+            white: xy(c.white),
+        }
     })
 }
 
@@ -435,12 +454,17 @@ pub const FACE_SIGNED: [&str; 6] = ["+x", "-x", "+y", "-y", "+z", "-z"];
 /// Reads six square face images from a pattern with `{face}` replaced by px, nx, py, ny, pz, nz
 /// (or +x, -x, ... when the px form does not exist), in OpenEXR order +X -X +Y -Y +Z -Z.
 pub fn read_faces(pattern: &str, layer: Option<&str>) -> Result<[RgbImage; 6]> {
+    Ok(read_face_files(pattern, layer)?.map(|f| f.image))
+}
+
+/// [`read_faces`], each face with what its file says about itself.
+pub fn read_face_files(pattern: &str, layer: Option<&str>) -> Result<[InputImage; 6]> {
     if !pattern.contains("{face}") {
         return Err(Error::invalid(format!(
             "face pattern '{pattern}' has no {{face}} placeholder"
         )));
     }
-    let mut faces = Vec::with_capacity(6);
+    let mut faces: Vec<InputImage> = Vec::with_capacity(6);
     for (name, signed) in FACE_NAMES.iter().zip(FACE_SIGNED) {
         let primary = PathBuf::from(pattern.replace("{face}", name));
         let alt = PathBuf::from(pattern.replace("{face}", signed));
@@ -461,7 +485,8 @@ pub fn read_faces(pattern: &str, layer: Option<&str>) -> Result<[RgbImage; 6]> {
                 ),
             });
         };
-        let img = read_rgb(&path, layer)?.image;
+        let file = read_rgb(&path, layer)?;
+        let img = &file.image;
         if img.width != img.height {
             return Err(parse_err(
                 &path,
@@ -469,7 +494,7 @@ pub fn read_faces(pattern: &str, layer: Option<&str>) -> Result<[RgbImage; 6]> {
             ));
         }
         if let Some(first) = faces.first() {
-            let first: &RgbImage = first;
+            let first: &RgbImage = &first.image;
             if first.width != img.width {
                 return Err(parse_err(
                     &path,
@@ -480,7 +505,7 @@ pub fn read_faces(pattern: &str, layer: Option<&str>) -> Result<[RgbImage; 6]> {
                 ));
             }
         }
-        faces.push(img);
+        faces.push(file);
     }
     faces
         .try_into()
@@ -578,6 +603,8 @@ pub enum AttrValue {
     I32(i32),
     /// Written as OpenEXR's `floatvector` attribute type.
     F32Vec(Vec<f32>),
+    /// OpenEXR's `chromaticities` attribute type (xy of red, green, blue and white).
+    Chromaticities(Chromaticities),
 }
 
 /// Everything that defines a written spectral (or custom-channel) OpenEXR file.
@@ -634,7 +661,18 @@ fn attr_to_exr(name: &str, v: &AttrValue) -> Result<AttributeValue> {
             kind: Text::from("floatvector"),
             bytes: xs.iter().flat_map(|x| x.to_le_bytes()).collect(),
         },
+        AttrValue::Chromaticities(c) => AttributeValue::Chromaticities(chromaticities_to_exr(c)),
     })
+}
+
+fn chromaticities_to_exr(c: &Chromaticities) -> exr::meta::attribute::Chromaticities {
+    let xy = |p: [f64; 2]| Vec2(p[0] as f32, p[1] as f32);
+    exr::meta::attribute::Chromaticities {
+        red: xy(c.red),
+        green: xy(c.green),
+        blue: xy(c.blue),
+        white: xy(c.white),
+    }
 }
 
 fn attr_from_exr(v: &AttributeValue) -> Option<AttrValue> {
@@ -799,6 +837,11 @@ impl SpectralWriter {
                     "{}: attribute {name} is reserved (set by the writer)",
                     dest.display()
                 )));
+            }
+            // OpenEXR's own attribute, which the `exr` crate keeps apart from custom ones.
+            if let (AttrValue::Chromaticities(c), "chromaticities") = (value, name.as_str()) {
+                header.shared_attributes.chromaticities = Some(chromaticities_to_exr(c));
+                continue;
             }
             put(name, attr_to_exr(name, value)?)?;
         }
@@ -1154,6 +1197,8 @@ pub struct SpectralInfo {
     /// The custom header attributes of a type [`AttrValue`] holds (`spectralLayoutVersion`,
     /// `emissiveUnits`, `EV` and the writer's extra ones), sorted by name.
     pub attributes: Vec<(String, AttrValue)>,
+    /// The `chromaticities` attribute: the space of the R, G, B channels (`None`: Rec.709, D65).
+    pub chromaticities: Option<Chromaticities>,
 }
 
 /// Reads the header of a spectral OpenEXR only: size, wavelengths, attributes (no pixels).
@@ -1265,6 +1310,7 @@ fn spectral_header(path: &Path) -> Result<SpectralHeader> {
         envmap: envmap_of(&header),
         ev,
         attributes,
+        chromaticities: chromaticities_of(&header),
     };
     Ok(SpectralHeader {
         reader,

@@ -1,7 +1,7 @@
 //! The conversion's first stage: read the map (one file or six face files), make its values
 //! usable (NaN, infinities and negatives counted), and resample it to the output layout.
 
-use crate::colorimetry::RgbSpace;
+use crate::colorimetry::{Chromaticities, RgbSpace};
 use crate::envmap::convert::{ConvertOptions, MAX_INPUT};
 use crate::envmap::exrio::{self, EnvmapAttr};
 use crate::envmap::layout::{detect, EnvMap, Layout};
@@ -22,6 +22,82 @@ pub struct Sanitized {
     pub negative_kept: usize,
 }
 
+/// Where the input's RGB space comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SpaceSource {
+    /// The file's `chromaticities` attribute.
+    File,
+    /// Asked for (`--space`, or the fit's space), whatever the file declares.
+    Given,
+    /// The file declares none: OpenEXR reads that as Rec.709 primaries with D65 (sRGB), and a
+    /// Radiance HDR file is taken as sRGB too.
+    Default,
+}
+
+/// The input's RGB space: its primaries and white, and why it is that one.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct SpaceChoice {
+    /// The space's name (`declared`: the file's chromaticities, which no named space has).
+    pub name: &'static str,
+    pub chromaticities: Chromaticities,
+    /// What RGB (1,1,1) is in the space, in words, e.g. "D50 (x 0.34570, y 0.35850)". It is
+    /// taken unadapted: a spectrum has the XYZ the space's RGB -> XYZ matrix gives.
+    pub white: String,
+    pub source: SpaceSource,
+    /// What the file declares, when that is not the space used.
+    pub declared: Option<Chromaticities>,
+    /// Why the space differs from the file's, in words.
+    pub note: Option<String>,
+    #[serde(skip)]
+    pub space: RgbSpace,
+}
+
+impl SpaceChoice {
+    /// The space of a file that declares `declared`, for `opts`.
+    pub fn resolve(
+        input: &str,
+        declared: Option<Chromaticities>,
+        opts: &ConvertOptions,
+    ) -> Result<SpaceChoice> {
+        let choice = |space: RgbSpace, source, note| SpaceChoice {
+            name: space.name,
+            chromaticities: space.chromaticities(),
+            white: space.white_name(),
+            source,
+            declared: declared.filter(|c| !c.same_as(&space.chromaticities())),
+            note,
+            space,
+        };
+        // A fit was solved in its own space; otherwise `--space` when asked.
+        let given = match &opts.fit {
+            Some(f) => Some((f.rgb_space(), "the fit's space")),
+            None => opts
+                .space_overrides_file
+                .then_some((opts.space, "the space asked for")),
+        };
+        Ok(match (declared, given) {
+            (Some(c), None) => {
+                let space = RgbSpace::from_chromaticities(c)
+                    .map_err(|e| Error::invalid(format!("{input}: {e}")))?;
+                choice(space, SpaceSource::File, None)
+            }
+            (Some(c), Some((space, what))) if !c.same_as(&space.chromaticities()) => {
+                let note = format!(
+                    "{what}, {} ({}), overrides the file's chromaticities ({c}): its RGB is \
+                     read in {}",
+                    space.name,
+                    space.chromaticities(),
+                    space.name
+                );
+                choice(space, SpaceSource::Given, Some(note))
+            }
+            (_, Some((space, _))) => choice(space, SpaceSource::Given, None),
+            (None, None) => choice(opts.space, SpaceSource::Default, None),
+        })
+    }
+}
+
 /// A pixel index and its RGB before negatives were clamped.
 pub type OutOfGamut = (usize, [f32; 3]);
 
@@ -33,6 +109,8 @@ pub struct Input {
     pub layout: Layout,
     pub size: [usize; 2],
     pub sanitized: Sanitized,
+    /// The RGB space the map's values are in.
+    pub space: SpaceChoice,
     /// Out-of-gamut pixels as they were (restored under the D65 premise when not resampled).
     pub out_of_gamut: Vec<OutOfGamut>,
     /// The map was resampled (layout, size or orientation changed).
@@ -66,8 +144,9 @@ impl Input {
 /// Reads, sanitises and lays out `input` for `opts`.
 pub fn read(input: &str, opts: &ConvertOptions) -> Result<Input> {
     let t0 = Instant::now();
-    let (mut map, description) = read_input(input, opts)?;
-    let (sanitized, out_of_gamut) = sanitize(&mut map, opts.strict, input, &opts.space)?;
+    let (mut map, description, declared) = read_input(input, opts)?;
+    let space = SpaceChoice::resolve(input, declared, opts)?;
+    let (sanitized, out_of_gamut) = sanitize(&mut map, opts.strict, input, &space.space)?;
     let layout = map.layout;
     let size = [map.image.width, map.image.height];
     let out_layout = opts.out_layout.unwrap_or(layout);
@@ -92,18 +171,34 @@ pub fn read(input: &str, opts: &ConvertOptions) -> Result<Input> {
         layout,
         size,
         sanitized,
+        space,
         out_of_gamut,
         resampled,
         seconds: t0.elapsed().as_secs_f64(),
     })
 }
 
-/// Reads the input map (one file or six face files) with its layout.
-fn read_input(input: &str, opts: &ConvertOptions) -> Result<(EnvMap, String)> {
+/// Reads the input map (one file or six face files) with its layout and the chromaticities it
+/// declares.
+fn read_input(
+    input: &str,
+    opts: &ConvertOptions,
+) -> Result<(EnvMap, String, Option<Chromaticities>)> {
     if opts.faces || input.contains("{face}") {
-        let faces = exrio::read_faces(input, opts.layer.as_deref())?;
-        let map = EnvMap::from_faces(faces)?;
-        return Ok((map, format!("six face files {input}")));
+        let faces = exrio::read_face_files(input, opts.layer.as_deref())?;
+        let declared = faces[0].chromaticities;
+        if let Some(k) = (1..6).find(|&k| faces[k].chromaticities != declared) {
+            return Err(Error::invalid(format!(
+                "{input}: the {} face declares other chromaticities than the {} face ({} and \
+                 {}): one map is in one RGB space",
+                exrio::FACE_NAMES[k],
+                exrio::FACE_NAMES[0],
+                describe(faces[k].chromaticities),
+                describe(declared)
+            )));
+        }
+        let map = EnvMap::from_faces(faces.map(|f| f.image))?;
+        return Ok((map, format!("six face files {input}"), declared));
     }
     let img = exrio::read_rgb(Path::new(input), opts.layer.as_deref())?;
     let attr = img.envmap.map(|a| match a {
@@ -117,7 +212,11 @@ fn read_input(input: &str, opts: &ConvertOptions) -> Result<(EnvMap, String)> {
     };
     let map =
         EnvMap::new(layout, img.image).map_err(|e| Error::invalid(format!("{input}: {e}")))?;
-    Ok((map, img.description))
+    Ok((map, img.description, img.chromaticities))
+}
+
+fn describe(c: Option<Chromaticities>) -> String {
+    c.map_or("none".into(), |c| c.to_string())
 }
 
 /// Sets NaN/infinite values to 0 (or refuses them) and clamps negatives, counting both. Pixels of

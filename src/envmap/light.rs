@@ -149,10 +149,11 @@ pub struct WhiteChoice {
 }
 
 /// Chooses the white premise of `map` for the main light `light` (a spectrum name or CSV): a
-/// map white-balanced to its main light shows that light as neutral, a D65-referenced one shows
-/// it in its own colour. So the brightest regions' chromaticity decides: nearer the light's white
-/// than D65's (CIE 1960 uv), the map is D65-referenced; otherwise it is balanced to the light.
-/// When the light's white is D65's (within 0.002 uv) the two premises are one.
+/// map white-balanced to its main light shows that light as neutral, one referenced to its RGB
+/// space's white (D65 for sRGB) shows it in its own colour. So the brightest regions'
+/// chromaticity decides: nearer the light's white than the space's (CIE 1960 uv), the map is
+/// referenced to the space's white; otherwise it is balanced to the light. When the light's
+/// white is the space's (within 0.002 uv) the two premises are one.
 pub fn choose_white(map: &EnvMap, space: &RgbSpace, light: &str) -> Result<WhiteChoice> {
     let grid = WavelengthGrid::visible_1nm();
     let cmfs = Cmfs::new(Observer::Cie1931, &grid)?;
@@ -160,40 +161,43 @@ pub fn choose_white(map: &EnvMap, space: &RgbSpace, light: &str) -> Result<White
         .data
         .resample(&grid, Interpolation::LIGHT);
     let light_uv = cmfs.light_xyz(&s, Rule::Riemann)?.uv1960();
-    let d65_uv = Xyz::from_xy(crate::colorimetry::D65_XY).uv1960();
+    let white_uv = Xyz::from_xy(space.white).uv1960();
+    let white = space.white_name();
     let dist = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]);
-    if dist(light_uv, d65_uv) <= 0.002 {
+    if dist(light_uv, white_uv) <= 0.002 {
         return Ok(WhiteChoice {
-            premise: WhitePremise::D65,
-            reason: format!("the main light {light} is D65-white: both premises are one"),
+            premise: WhitePremise::Space,
+            reason: format!(
+                "the main light {light} has the space's white, {white}: both premises are one"
+            ),
         });
     }
     let rgb = bright_regions(map, space);
     let xyz = space.xyz_from_rgb(rgb);
     if xyz.y().is_nan() || xyz.y() <= 0.0 {
         return Ok(WhiteChoice {
-            premise: WhitePremise::D65,
-            reason: "the map holds no light: RGB taken as D65-referenced".into(),
+            premise: WhitePremise::Space,
+            reason: format!("the map holds no light: RGB taken as referenced to {white}"),
         });
     }
     let uv = xyz.uv1960();
-    let (to_light, to_d65) = (dist(uv, light_uv), dist(uv, d65_uv));
-    Ok(if to_light < to_d65 {
+    let (to_light, to_white) = (dist(uv, light_uv), dist(uv, white_uv));
+    Ok(if to_light < to_white {
         WhiteChoice {
-            premise: WhitePremise::D65,
+            premise: WhitePremise::Space,
             reason: format!(
                 "the brightest regions have the colour of {light} (uv distance {to_light:.4}, \
-                 {to_d65:.4} from D65 white): the map is D65-referenced, not white-balanced to \
-                 its light"
+                 {to_white:.4} from the space's white {white}): the map is referenced to that \
+                 white, not white-balanced to its light"
             ),
         }
     } else {
         WhiteChoice {
             premise: WhitePremise::Light,
             reason: format!(
-                "the brightest regions are neutral (uv distance {to_d65:.4} from D65 white, \
-                 {to_light:.4} from {light}): the map is white-balanced to its light, as the \
-                 paper assumes"
+                "the brightest regions are neutral (uv distance {to_white:.4} from the space's \
+                 white {white}, {to_light:.4} from {light}): the map is white-balanced to its \
+                 light, as the paper assumes"
             ),
         }
     })

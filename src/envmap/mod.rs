@@ -15,6 +15,7 @@ pub mod overlay;
 pub mod plan;
 pub mod planes;
 pub mod roundtrip;
+pub mod roundtrip_stats;
 pub mod scene;
 pub mod sun;
 pub mod write;

@@ -57,7 +57,7 @@ pub fn analyse(input: &mut Input, opts: &ConvertOptions) -> Result<Analysis> {
     };
     let white = white_premise(input, opts, &light, one)?;
     let mut notes = Vec::new();
-    if white.premise == WhitePremise::D65 {
+    if white.premise == WhitePremise::Space {
         notes.extend(input.keep_out_of_gamut());
     } else {
         let balance = light_rgb(&light, opts.space)?;
@@ -98,12 +98,15 @@ fn white_premise(
                 "--white light: RGB (1,1,1) is the main light {light} (the paper's premise)"
             ),
         },
-        WhiteSpec::D65 => WhiteChoice {
-            premise: WhitePremise::D65,
-            reason: "--white d65: RGB (1,1,1) is D65 white".into(),
+        WhiteSpec::Space => WhiteChoice {
+            premise: WhitePremise::Space,
+            reason: format!(
+                "--white space: RGB (1,1,1) is the space's white, {}",
+                opts.space.white_name()
+            ),
         },
         WhiteSpec::Auto if !one && opts.light == LightSpec::Auto => WhiteChoice {
-            premise: WhitePremise::D65,
+            premise: WhitePremise::Space,
             reason: "the scene's lights keep their own colours; say --white light --light NAME \
                      for a map white-balanced to its lamps"
                 .into(),
@@ -343,7 +346,7 @@ fn basis_engine(
             // The engine takes the sun's colour as the input has it.
             premise_rgb = match premise {
                 WhitePremise::Light => std::array::from_fn(|k| rgb[k] / balance[k]),
-                WhitePremise::D65 => *rgb,
+                WhitePremise::Space => *rgb,
             };
             SunSource::DaylightFit(premise_rgb)
         }
@@ -433,7 +436,7 @@ fn carrier_plan(
             let t = data::spectrum(&analysis.light)?.data;
             c.rgb(&c.light(&analysis.light, &t)?)?.into()
         }
-        WhitePremise::D65 => [1.0; 3],
+        WhitePremise::Space => [1.0; 3],
     };
     let engine = CarrierEngine::new(
         &c,

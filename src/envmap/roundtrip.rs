@@ -1,24 +1,15 @@
 //! `roundtrip`: re-read a spectral OpenEXR, integrate its spectra back to RGB and compare them
 //! with the file's own R, G, B preview (the original pixels), pixel by pixel, streaming.
 
-use crate::colorimetry::{delta_e_2000, Lab, Observer, RgbSpace};
+use crate::colorimetry::{Chromaticities, Observer, RgbSpace};
 use crate::envmap::exrio::{read_spectral_rows, AttrValue, EnvmapAttr};
 use crate::envmap::layout::{detect, EnvMap, Layout};
+use crate::envmap::metric::RgbMetric;
+use crate::envmap::roundtrip_stats::{Floor, RoundTripAccumulator, RoundTripStats};
 use crate::envmap::RgbImage;
 use crate::error::{Error, Result};
 use crate::spectrum::{Interpolation, Rule, Tabulated, WavelengthGrid};
 use std::path::Path;
-
-/// Statistics of one set of pixels.
-#[derive(Debug, Clone, Copy, Default, serde::Serialize)]
-pub struct Stats {
-    pub pixels: usize,
-    /// Energy-weighted (luminance x solid angle) mean CIEDE2000.
-    pub weighted_mean_de2000: f64,
-    pub max_de2000: f64,
-    /// Pixel (x, y) of the maximum.
-    pub max_at: [usize; 2],
-}
 
 /// The result of a file round trip.
 #[derive(Debug, Clone, serde::Serialize)]
@@ -29,40 +20,39 @@ pub struct FileRoundTrip {
     pub layout: Option<Layout>,
     pub wavelengths: usize,
     pub range_nm: [f64; 2],
+    /// The space of the R, G, B channels (its `chromaticities`, else `specmap.space`).
     pub space: String,
+    pub chromaticities: Chromaticities,
     /// The main light's RGB the spectra were divided by (the paper's white balance), from the
     /// `specmap.lightRGB` attribute; None for files without it.
     pub white_balance: Option<[f64; 3]>,
-    pub all: Stats,
+    /// The luminance floor of the statistics (see [`Floor`]).
+    pub floor: Floor,
+    /// The statistic `convert` reports too (see [`crate::envmap::roundtrip_stats`]).
+    pub all: RoundTripStats,
     /// Pixels not marked in the `sun` channel (all pixels when the file has none).
-    pub without_sun: Stats,
+    pub without_sun: RoundTripStats,
     pub sun_pixels: usize,
     /// Pixels left out because a band or an R, G, B value is NaN or infinite (or their
     /// integral overflows).
     pub non_finite_pixels: usize,
 }
 
-#[derive(Default)]
-struct Acc {
-    w: f64,
-    sum: f64,
-    stats: Stats,
-}
-
-impl Acc {
-    fn add(&mut self, de: f64, weight: f64, x: usize, y: usize) {
-        self.sum += de * weight;
-        self.w += weight;
-        self.stats.pixels += 1;
-        if de > self.stats.max_de2000 {
-            self.stats.max_de2000 = de;
-            self.stats.max_at = [x, y];
-        }
-    }
-    fn finish(mut self) -> Stats {
-        self.stats.weighted_mean_de2000 = if self.w > 0.0 { self.sum / self.w } else { 0.0 };
-        self.stats
-    }
+/// The space of a file's R, G, B: its `chromaticities` (the space `specmap.space` names when it
+/// has them: sRGB and the paper's sRGB share them), else the named one, else sRGB (OpenEXR's
+/// Rec.709 with D65).
+fn preview_space(
+    path: &Path,
+    named: Option<RgbSpace>,
+    declared: Option<Chromaticities>,
+) -> Result<RgbSpace> {
+    Ok(match (named, declared) {
+        (Some(n), Some(c)) if n.chromaticities().same_as(&c) => n,
+        (_, Some(c)) => RgbSpace::from_chromaticities(c)
+            .map_err(|e| Error::invalid(format!("{}: {e}", path.display())))?,
+        (Some(n), None) => n,
+        (None, None) => RgbSpace::SRGB,
+    })
 }
 
 /// Reads the single float channel `name` of the first part, if the file has it.
@@ -148,14 +138,12 @@ pub fn round_trip_file(
         }
     };
     let y_norm: f64 = yb.iter().zip(&weights).map(|(y, w)| y * w).sum();
-    let mut info_space = RgbSpace::SRGB;
+    let mut named = None;
     let mut white_balance = None;
     for (name, value) in &header.attributes {
         match (name.as_str(), value) {
             ("specmap.space", AttrValue::Text(t)) => {
-                if let Some(s) = RgbSpace::ALL.into_iter().find(|s| s.name == *t) {
-                    info_space = s;
-                }
+                named = RgbSpace::ALL.into_iter().find(|s| s.name == *t);
             }
             ("specmap.lightRGB", AttrValue::F32Vec(v)) if v.len() == 3 => {
                 white_balance = Some([v[0] as f64, v[1] as f64, v[2] as f64]);
@@ -163,9 +151,9 @@ pub fn round_trip_file(
             _ => {}
         }
     }
-    let space = info_space;
+    let space = preview_space(path, named, header.chromaticities)?;
     let m = space.from_xyz_matrix();
-    let white = space.xyz_from_rgb([1.0, 1.0, 1.0]);
+    let metric = RgbMetric::new(&space);
     let envmap = header.envmap.map(|e| match e {
         EnvmapAttr::LatLong => Layout::LatLong,
         EnvmapAttr::Cube => Layout::Cube,
@@ -173,12 +161,11 @@ pub fn round_trip_file(
     let layout = detect(width, height, envmap).ok();
     let solid = layout.and_then(|l| EnvMap::new(l, RgbImage::new(width, height)).ok());
     let sun = read_mask(path, "sun");
-    let y_row = {
-        let t = space.to_xyz_matrix();
-        [t[(1, 0)], t[(1, 1)], t[(1, 2)]]
-    };
     let bands = wavelengths.len();
-    let (mut all, mut no_sun) = (Acc::default(), Acc::default());
+    let (mut all, mut no_sun) = (
+        RoundTripAccumulator::default(),
+        RoundTripAccumulator::default(),
+    );
     let mut sun_pixels = 0;
     let mut non_finite_pixels = 0;
     let mut missing_rgb = false;
@@ -208,29 +195,26 @@ pub fn round_trip_file(
                     back[k] /= t[k];
                 }
             }
-            let input = [p[bands] as f64, p[bands + 1] as f64, p[bands + 2] as f64];
-            if !(back.iter().chain(&input).all(|v| v.is_finite())) {
+            let input = [p[bands], p[bands + 1], p[bands + 2]];
+            if !(back.iter().all(|v| v.is_finite()) && input.iter().all(|v| v.is_finite())) {
                 non_finite_pixels += 1;
                 continue;
             }
-            let lum = y_row[0] * input[0] + y_row[1] * input[1] + y_row[2] * input[2];
-            if lum.is_nan() || lum <= 0.0 {
-                continue;
-            }
-            let de = delta_e_2000(
-                Lab::from_xyz(space.xyz_from_rgb(input.map(|v| v / lum)), white),
-                Lab::from_xyz(space.xyz_from_rgb(back.map(|v| v / lum)), white),
-            );
+            let lum = metric.luminance(input);
+            let de = if lum > 0.0 {
+                metric.round_trip_error(input, back)
+            } else {
+                0.0
+            };
             let omega = solid.as_ref().map(|s| s.solid_angle(x, y)).unwrap_or(1.0);
             let i = y * width + x;
-            let is_sun = sun.as_ref().is_some_and(|s| s[i] > 0.5);
-            all.add(de, lum * omega, x, y);
-            if is_sun {
+            all.add(x, y, lum, omega, de);
+            if sun.as_ref().is_some_and(|s| s[i] > 0.5) {
                 sun_pixels += 1;
             } else {
-                no_sun.add(de, lum * omega, x, y);
+                no_sun.add(x, y, lum, omega, de);
             }
-            if let Some(h) = heatmap.as_deref_mut() {
+            if let Some(h) = heatmap.as_deref_mut().filter(|_| lum > 0.0 && omega > 0.0) {
                 h[i] = de as f32;
             }
         }
@@ -241,6 +225,7 @@ pub fn round_trip_file(
             path.display()
         )));
     }
+    let floor = all.floor();
     Ok(FileRoundTrip {
         file: path.display().to_string(),
         width,
@@ -249,9 +234,11 @@ pub fn round_trip_file(
         wavelengths: bands,
         range_nm: [wavelengths[0], wavelengths[bands - 1]],
         space: space.name.to_string(),
+        chromaticities: space.chromaticities(),
         white_balance,
-        all: all.finish(),
-        without_sun: no_sun.finish(),
+        floor,
+        all: all.stats(&floor),
+        without_sun: no_sun.stats(&floor),
         sun_pixels,
         non_finite_pixels,
     })

@@ -12,8 +12,10 @@ use crate::envmap::layout::{EnvMap, Layout};
 use crate::envmap::metric::RgbMetric;
 use crate::envmap::plan::{PixelPlan, Plan};
 use crate::envmap::planes::{self, RowMut, SpectralRows};
+use crate::envmap::roundtrip_stats::{Floor, RoundTripAccumulator, RoundTripStats};
 use crate::envmap::scene::Cells;
 use crate::error::Result;
+use crate::fit::Mode;
 use rayon::prelude::*;
 use std::path::Path;
 use std::time::Instant;
@@ -32,8 +34,10 @@ pub struct SpectraCount {
     pub smooth: usize,
     /// Carrier x ColorChecker basis.
     pub colorchecker: usize,
-    /// Carrier x non-negative Bernstein combination (exact).
-    pub nonneg: usize,
+    /// Carrier x non-negative Bernstein combination (exact): the faithful method's fallback where
+    /// the smooth modulation and the ColorChecker basis go negative. Not the paper's `nonneg`
+    /// mode, whose pixels count as `colorchecker` where exact and `nearest` where not.
+    pub nonneg_fallback: usize,
     /// The nearest non-negative spectrum (the colour is not one its light can make).
     pub nearest: usize,
     /// Clipped lamp pixels given their lamp's SPD.
@@ -49,7 +53,7 @@ impl SpectraCount {
             Took::Daylight => self.daylight += 1,
             Took::Smooth => self.smooth += 1,
             Took::Colorchecker => self.colorchecker += 1,
-            Took::Nonneg => self.nonneg += 1,
+            Took::Nonneg => self.nonneg_fallback += 1,
             Took::Nearest => self.nearest += 1,
             Took::Fixed => self.clipped += 1,
         }
@@ -60,63 +64,20 @@ impl SpectraCount {
         self.daylight += o.daylight;
         self.smooth += o.smooth;
         self.colorchecker += o.colorchecker;
-        self.nonneg += o.nonneg;
+        self.nonneg_fallback += o.nonneg_fallback;
         self.nearest += o.nearest;
         self.clipped += o.clipped;
         self.negative += o.negative;
     }
 }
 
-/// RGB -> SPD -> RGB over a set of written pixels.
-#[derive(Debug, Clone, Copy, Default, serde::Serialize)]
-pub struct RoundTripStats {
-    /// Energy-weighted (luminance x solid angle) mean CIEDE2000.
-    pub weighted_mean_de2000: f64,
-    pub max_de2000: f64,
-    pub pixels: usize,
-}
-
-#[derive(Debug, Clone, Copy, Default)]
-struct Accumulator {
-    weighted: f64,
-    weight: f64,
-    max: f64,
-    pixels: usize,
-}
-
-impl Accumulator {
-    fn add(&mut self, de: f64, w: f64) {
-        self.weighted += de * w;
-        self.weight += w;
-        self.max = self.max.max(de);
-        self.pixels += 1;
-    }
-    fn merge(&mut self, o: &Accumulator) {
-        self.weighted += o.weighted;
-        self.weight += o.weight;
-        self.max = self.max.max(o.max);
-        self.pixels += o.pixels;
-    }
-    fn stats(&self) -> RoundTripStats {
-        RoundTripStats {
-            weighted_mean_de2000: if self.weight > 0.0 {
-                self.weighted / self.weight
-            } else {
-                0.0
-            },
-            max_de2000: self.max,
-            pixels: self.pixels,
-        }
-    }
-}
-
 /// The round trip over all pixels, without the sun, and over the pixels that could not be
-/// exact (the nearest non-negative spectra, clipped lamp pixels).
-#[derive(Debug, Clone, Copy, Default)]
+/// exact (the nearest non-negative spectra, clipped lamp pixels, the paper modes' inexact ones).
+#[derive(Debug, Clone, Default)]
 struct Tally {
-    all: Accumulator,
-    no_sun: Accumulator,
-    inexact: Accumulator,
+    all: RoundTripAccumulator,
+    no_sun: RoundTripAccumulator,
+    inexact: RoundTripAccumulator,
     count: SpectraCount,
 }
 
@@ -137,6 +98,22 @@ struct Pixels<'a> {
 }
 
 impl Pixels<'_> {
+    /// What a written pixel took and whether its round trip is exact. The carriers say so
+    /// themselves; the paper's basis is exact in its exact mode, for white only in the paper
+    /// mode, and where the spectrum stays non-negative in the nonneg mode, whose other pixels
+    /// get the nearest non-negative spectrum: so its pixels are exact when their round trip is.
+    fn exactness(&self, w: Written, de: f64) -> (Took, bool) {
+        match &self.plan.pixels {
+            PixelPlan::Carriers { .. } => (w.took, w.exact),
+            PixelPlan::Basis { .. } => {
+                let exact = de == 0.0;
+                let nearest =
+                    !exact && w.took == Took::Colorchecker && self.plan.fit.mode == Mode::Nonneg;
+                (if nearest { Took::Nearest } else { w.took }, exact)
+            }
+        }
+    }
+
     fn metric(&self) -> &RgbMetric {
         match &self.plan.pixels {
             PixelPlan::Basis { engine, .. } => engine.metric(),
@@ -278,6 +255,8 @@ pub struct WriteStats {
     pub channels: usize,
     pub bytes: u64,
     pub spectra: SpectraCount,
+    /// The luminance floor of the round-trip statistics (the map's).
+    pub roundtrip_floor: Floor,
     pub roundtrip: RoundTripStats,
     pub roundtrip_without_sun: RoundTripStats,
     /// Over the pixels whose spectrum could not reproduce their RGB.
@@ -347,7 +326,7 @@ pub fn write(
     let blocks = (BATCH_BYTES / block_bytes.max(1)).clamp(1, height.div_ceil(lines));
     let rows_per_block = (blocks * lines).max(16).min(height);
     let px = Pixels { map, cells, plan };
-    let tallies = match &plan.pixels {
+    let tally = match &plan.pixels {
         PixelPlan::Basis { engine, .. } => {
             stream_planes(&px, engine, &mut writer, rows_per_block, progress)?
         }
@@ -355,19 +334,17 @@ pub fn write(
             stream_rows(&px, &mut writer, rows_per_block, per_pixel, progress)?
         }
     };
-    let mut tally = Tally::default();
-    for t in tallies {
-        tally.merge(&t);
-    }
     let seconds_encode = writer.encode_seconds();
     let bytes = writer.finish()?;
+    let floor = tally.all.floor();
     Ok(WriteStats {
         channels: per_pixel,
         bytes,
         spectra: tally.count,
-        roundtrip: tally.all.stats(),
-        roundtrip_without_sun: tally.no_sun.stats(),
-        roundtrip_inexact: tally.inexact.stats(),
+        roundtrip_floor: floor,
+        roundtrip: tally.all.stats(&floor),
+        roundtrip_without_sun: tally.no_sun.stats(&floor),
+        roundtrip_inexact: tally.inexact.stats(&floor),
         seconds: t1.elapsed().as_secs_f64(),
         seconds_encode,
     })
@@ -381,25 +358,31 @@ fn stream_rows(
     rows_per_block: usize,
     per_pixel: usize,
     progress: &(dyn Fn(usize, usize) + Sync),
-) -> Result<Vec<Tally>> {
+) -> Result<Tally> {
     let (width, height) = (px.map.image.width, px.map.image.height);
     let mut buffer = vec![0f32; rows_per_block * width * per_pixel];
-    let mut tallies = Vec::with_capacity(height);
+    let mut tally = Tally::default();
     let mut y0 = 0;
     while y0 < height {
         let rows = rows_per_block.min(height - y0);
         let buf = &mut buffer[..rows * width * per_pixel];
-        let row_tallies: Vec<Tally> = buf
+        let batch = buf
             .par_chunks_mut(width * per_pixel)
             .enumerate()
-            .map(|(r, row)| write_row(px, y0 + r, row, per_pixel))
-            .collect();
-        tallies.extend(row_tallies);
+            .fold(Tally::default, |mut t, (r, row)| {
+                write_row(px, y0 + r, row, per_pixel, &mut t);
+                t
+            })
+            .reduce(Tally::default, |mut a, b| {
+                a.merge(&b);
+                a
+            });
+        tally.merge(&batch);
         writer.write_rows(y0, buf)?;
         y0 += rows;
         progress(y0, height);
     }
-    Ok(tallies)
+    Ok(tally)
 }
 
 /// The rows as coefficient planes of the engine's few spectra (the paper's modes), the next
@@ -411,7 +394,7 @@ fn stream_planes(
     writer: &mut SpectralWriter,
     rows_per_block: usize,
     progress: &(dyn Fn(usize, usize) + Sync),
-) -> Result<Vec<Tally>> {
+) -> Result<Tally> {
     let (width, height) = (px.map.image.width, px.map.image.height);
     let bands = match px.plan.format {
         OutputFormat::Spectral => px.plan.grid.len(),
@@ -419,7 +402,9 @@ fn stream_planes(
     };
     let new_batch = || SpectralRows::new(engine.spectra_table(), bands, 4, width, rows_per_block);
     let mut planes = [new_batch(), new_batch()];
-    let fill = |y: usize, mut row: RowMut| -> Tally {
+    // Each row's tally is merged as it is done (a map's rows of luminance bins would not fit).
+    let tally = std::sync::Mutex::new(Tally::default());
+    let fill = |y: usize, mut row: RowMut| {
         let mut t = Tally::default();
         // The spectrum itself is only looked at (negative values, the round trip).
         let mut scratch = vec![0f32; px.plan.grid.len()];
@@ -437,15 +422,25 @@ fn stream_planes(
             for (e, v) in extra.into_iter().enumerate() {
                 row.set_extra(e, x, v);
             }
-            t.count.add(r.took, r.negative);
             let w = Written {
                 rgb_back: r.rgb_back,
                 took: r.took,
                 exact: true,
             };
-            measure(&mut t, px, x, y, &w, is_sun && r.took == Took::Sun);
+            measure(
+                &mut t,
+                px,
+                x,
+                y,
+                w,
+                r.negative,
+                is_sun && r.took == Took::Sun,
+            );
         }
-        t
+        tally
+            .lock()
+            .expect("no tally is merged by a panicking thread")
+            .merge(&t);
     };
     planes::stream(
         &mut planes,
@@ -457,53 +452,65 @@ fn stream_planes(
             progress(y0 + rows, height);
             Ok(())
         },
-    )
+    )?;
+    Ok(tally
+        .into_inner()
+        .expect("no tally is merged by a panicking thread"))
 }
 
-/// One row of the output: each pixel's values, and what it took.
-fn write_row(px: &Pixels, y: usize, row: &mut [f32], per_pixel: usize) -> Tally {
+/// One row of the output: each pixel's values, and what it took, added to `t`.
+fn write_row(px: &Pixels, y: usize, row: &mut [f32], per_pixel: usize, t: &mut Tally) {
     let width = px.map.image.width;
     let bands = px.plan.grid.len();
-    let mut t = Tally::default();
     // The basis format writes coefficients; the round trip still needs the spectrum.
     let mut scratch = vec![0f32; bands];
     for x in 0..width {
         let rgb = px.map.image.get(x, y);
         let out = &mut row[x * per_pixel..(x + 1) * per_pixel];
-        let (w, is_sun) = match px.plan.format {
+        let (w, is_sun, negative) = match px.plan.format {
             OutputFormat::Spectral => {
                 let (spectrum, rest) = out.split_at_mut(bands);
-                let r = px.spectrum(x, y, spectrum, &mut [0f32; 4]);
+                let (w, is_sun) = px.spectrum(x, y, spectrum, &mut [0f32; 4]);
                 rest[..3].copy_from_slice(&rgb);
-                rest[3] = r.1 as u8 as f32;
-                t.count.add(r.0.took, carriers::is_negative(spectrum));
-                r
+                rest[3] = is_sun as u8 as f32;
+                (w, is_sun, carriers::is_negative(spectrum))
             }
             OutputFormat::Basis => {
-                let r = px.spectrum(x, y, &mut scratch, out);
-                t.count.add(r.0.took, carriers::is_negative(&scratch));
-                r
+                let (w, is_sun) = px.spectrum(x, y, &mut scratch, out);
+                (w, is_sun, carriers::is_negative(&scratch))
             }
         };
-        measure(&mut t, px, x, y, &w, is_sun);
+        measure(t, px, x, y, w, negative, is_sun);
     }
-    t
 }
 
-/// Adds pixel (x, y)'s round trip to the tally (energy-weighted: luminance x solid angle).
-fn measure(t: &mut Tally, px: &Pixels, x: usize, y: usize, w: &Written, is_sun: bool) {
+/// Adds pixel (x, y) to the tally: which spectrum it took, and its round trip (see
+/// [`crate::envmap::roundtrip_stats`]) over all pixels, without the sun, and if inexact.
+fn measure(
+    t: &mut Tally,
+    px: &Pixels,
+    x: usize,
+    y: usize,
+    w: Written,
+    negative: bool,
+    is_sun: bool,
+) {
     let metric = px.metric();
     let rgb = px.map.image.get(x, y);
-    let omega = px.map.solid_angle(x, y);
     let lum = metric.luminance(rgb);
-    if lum > 0.0 && omega > 0.0 {
-        let de = metric.round_trip_error(rgb, w.rgb_back);
-        t.all.add(de, lum * omega);
-        if !is_sun {
-            t.no_sun.add(de, lum * omega);
-        }
-        if !w.exact && !is_sun {
-            t.inexact.add(de, lum * omega);
+    let de = if lum > 0.0 {
+        metric.round_trip_error(rgb, w.rgb_back)
+    } else {
+        0.0
+    };
+    let (took, exact) = px.exactness(w, de);
+    t.count.add(took, negative);
+    let omega = px.map.solid_angle(x, y);
+    t.all.add(x, y, lum, omega, de);
+    if !is_sun {
+        t.no_sun.add(x, y, lum, omega, de);
+        if !exact {
+            t.inexact.add(x, y, lum, omega, de);
         }
     }
 }

@@ -252,18 +252,11 @@ fn exr_channels(path: &Path) -> Option<Vec<String>> {
     )
 }
 
-fn fit_upsampler(light: &str, basis: [&str; 3]) -> Result<(Upsampler, String)> {
+fn fit_upsampler(light: &str, basis: [&str; 3], space: RgbSpace) -> Result<(Upsampler, String)> {
     let grid = WavelengthGrid::new(380.0, 780.0, 5.0)?;
-    let input = FitInput::from_names(
-        light,
-        basis,
-        &grid,
-        Observer::Cie1931,
-        Rule::Riemann,
-        RgbSpace::SRGB,
-    )?;
+    let input = FitInput::from_names(light, basis, &grid, Observer::Cie1931, Rule::Riemann, space)?;
     let f = fit::fit(&input, Mode::Exact)?;
-    Ok((Upsampler::new(&f, &RgbSpace::SRGB), f.light))
+    Ok((Upsampler::new(&f, &space), f.light))
 }
 
 fn lighting(light: &str, basis: [&str; 3], env: CoeffMap, sun: Option<Sun>) -> Result<Lighting> {
@@ -352,8 +345,14 @@ fn to_coefficients(map: &EnvMap, f: impl Fn([f32; 3]) -> [f64; 3] + Sync) -> Coe
     }
 }
 
-fn read_map(path: &Path) -> Result<(EnvMap, [usize; 2])> {
+/// The map, its size and its RGB space (its `chromaticities`, else sRGB as OpenEXR has it).
+fn read_map(path: &Path) -> Result<(EnvMap, [usize; 2], RgbSpace)> {
     let img = exrio::read_rgb(path, None)?;
+    let space = match img.chromaticities {
+        Some(c) => RgbSpace::from_chromaticities(c)
+            .map_err(|e| Error::invalid(format!("{}: {e}", path.display())))?,
+        None => RgbSpace::SRGB,
+    };
     let attr = img.envmap.map(|a| match a {
         EnvmapAttr::LatLong => Layout::LatLong,
         EnvmapAttr::Cube => Layout::Cube,
@@ -365,12 +364,11 @@ fn read_map(path: &Path) -> Result<(EnvMap, [usize; 2])> {
     sanitize(path, &mut image)?;
     let map = EnvMap::new(layout, image)
         .map_err(|e| Error::invalid(format!("{}: {e}", path.display())))?;
-    Ok((map, size))
+    Ok((map, size, space))
 }
 
 fn load_rgb(path: &Path, light: &str) -> Result<(Lighting, EnvReport)> {
-    let (mut map, input_size) = read_map(path)?;
-    let space = RgbSpace::SRGB;
+    let (mut map, input_size, space) = read_map(path)?;
     let search = find_sun(&map, &space, &SunSettings::default());
     let m = space.to_xyz_matrix();
     let y_row = [m[(1, 0)], m[(1, 1)], m[(1, 2)]];
@@ -384,7 +382,7 @@ fn load_rgb(path: &Path, light: &str) -> Result<(Lighting, EnvReport)> {
     }
     let sun = directional(&map, &s);
     let basis = fit::PAPER_BASIS;
-    let (up, light_label) = fit_upsampler(light, basis)?;
+    let (up, light_label) = fit_upsampler(light, basis, space)?;
     let coeffs = to_coefficients(&map, |p| {
         up.coefficients([p[0] as f64, p[1] as f64, p[2] as f64])
     });

@@ -40,3 +40,16 @@ pub fn write_channels(path: &Path, w: usize, h: usize, channels: Vec<(&str, Vec<
     );
     Image::from_layer(layer).write().to_file(path).unwrap();
 }
+
+/// Runs `specmap ARGS --json`, which must succeed, and parses its output.
+pub fn specmap_json(args: &[&str]) -> serde_json::Value {
+    let mut all = args.to_vec();
+    all.push("--json");
+    let out = specmap(&all);
+    assert!(
+        out.status.success(),
+        "{args:?} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap_or_else(|e| panic!("{args:?}: {e}"))
+}
