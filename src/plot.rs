@@ -35,6 +35,24 @@ pub(crate) fn register_font() {
     });
 }
 
+/// Writes an RGB image (row-major, 3 bytes a pixel) as a PNG through a temporary file renamed
+/// into place; `what` names it in errors ("heatmap", "overlay").
+pub(crate) fn write_rgb_png(
+    path: &Path,
+    (w, h): (usize, usize),
+    rgb: Vec<u8>,
+    what: &str,
+) -> Result<()> {
+    let drawn =
+        |e: String| Error::invalid(format!("{}: cannot draw the {what}: {e}", path.display()));
+    let img = image::RgbImage::from_raw(w as u32, h as u32, rgb)
+        .ok_or_else(|| drawn("the image buffer does not match its size".into()))?;
+    let mut png = Vec::new();
+    img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .map_err(|e| drawn(e.to_string()))?;
+    crate::io::write_atomic(path, &png)
+}
+
 /// Writes the figure to `path` (.png or .svg) through a temporary file renamed into place. The
 /// figure is drawn in memory, so a file that cannot be written is reported by the operating
 /// system's reason, naming `path`.

@@ -617,28 +617,6 @@ fn quiet_prints_nothing_but_errors() {
     assert!(err.starts_with("error: --rotation inf"), "{err}");
 }
 
-/// The `sun` channel of a spectral file as stored (no EV applied).
-fn stored_channel(path: &Path, name: &str) -> Vec<f32> {
-    let image = read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .all_channels()
-        .first_valid_layer()
-        .all_attributes()
-        .from_file(path)
-        .unwrap();
-    image
-        .layer_data
-        .channel_data
-        .list
-        .iter()
-        .find(|c| c.name == *name)
-        .expect("the channel")
-        .sample_data
-        .values_as_f32()
-        .collect()
-}
-
 /// Half precision loses nothing silently: the EV scale leaves the sun mask 0/1 (roundtrip still
 /// finds the sun), and a scale that would flush dim pixels to zero makes the file float.
 #[test]
@@ -661,7 +639,7 @@ fn the_ev_scale_keeps_the_sun_mask_and_never_flushes_pixels() {
     assert_eq!(r["precision"], "half");
     assert!(r["ev"].as_f64().unwrap() >= 1.0, "{}", r["ev"]);
     assert_eq!(r["sun"]["found"], true, "{}", r["sun"]);
-    let mask = stored_channel(&out, "sun");
+    let mask = specmap::envmap::exrio::read_stored_channel(&out, "sun").unwrap();
     assert!(mask.iter().all(|&v| v == 0.0 || v == 1.0));
     assert!(mask.iter().filter(|&&v| v == 1.0).count() >= 1);
     let rt = specmap(&["roundtrip", o, "--json"]);
@@ -697,6 +675,6 @@ fn the_ev_scale_keeps_the_sun_mask_and_never_flushes_pixels() {
         "{}",
         r["notes"]
     );
-    let dark = stored_channel(&out, "S0.550,000000nm");
+    let dark = specmap::envmap::exrio::read_stored_channel(&out, "S0.550,000000nm").unwrap();
     assert!(dark.iter().all(|&v| v > 0.0), "no pixel is written as 0");
 }

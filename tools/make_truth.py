@@ -399,14 +399,16 @@ def interior_scene(tube):
     return wl, radiance, params
 
 
-def street_scene():
-    wl = grid(780.0)
-    spd = light("light", "hps", wl)
+def street(wl, lamp_spds, sky_spd, sky_fraction):
+    """A night street 12 m wide between facades, seven lamps on 7 m poles 15 m apart, alternating
+    sides, each a 0.3 m sphere of intensity 2000 x its spectrum (each at luminance 1) emitting
+    downwards only, under a sky of `sky_spd` (luminance 1) at `sky_fraction` of the road's
+    luminance under a lamp. Radiance per pixel, 4 x 4 samples each."""
     eye = np.array([0.0, 1.6, 0.0])
     half_w, facade_h, lamp_h, lamp_r = 6.0, 15.0, 7.0, 0.3
     lamps = np.array([[4.5 if k % 2 == 0 else -4.5, lamp_h, 15.0 * (k - 3)] for k in range(7)])
     # Intensity so that the road under a lamp has illuminance-like luminance ~ 1.
-    intensity = spd / xyz_of(spd, wl)[1] * 2000.0
+    intensities = [spd * 2000.0 for spd in lamp_spds]
     ss = 4
     dirs = latlong_dirs(WIDTH, HEIGHT, ss).reshape(-1, 3)
     n_rays = len(dirs)
@@ -436,14 +438,20 @@ def street_scene():
     normals[kind == 1] = [1, 0, 0]
     normals[kind == 2] = [-1, 0, 0]
     surf = (kind == 0) | (kind == 1) | (kind == 2)
-    g = np.zeros(n_rays)
-    for c in lamps:
+    # The lamps' geometric factors, summed over the lamps of each spectrum (in lamp order).
+    groups = []
+    for c, i_spd in zip(lamps, intensities):
         v = c - p
         r2 = (v * v).sum(-1)
         r = np.sqrt(r2)
         cos_r = np.maximum(0.0, (v * normals).sum(-1) / r)
         # The lamp emits downwards only: it lights the points below it.
-        g += np.where(surf & (v[:, 1] > 0), cos_r / r2, 0.0)
+        g = np.where(surf & (v[:, 1] > 0), cos_r / r2, 0.0)
+        same = next((grp for grp in groups if np.array_equal(grp[0], i_spd)), None)
+        if same is None:
+            groups.append([i_spd, np.zeros(n_rays)])
+            same = groups[-1]
+        same[1] += g
     refl = np.zeros((n_rays, len(wl)))
     road = kind == 0
     refl[road] = patch("neutral-3.5", wl)
@@ -455,15 +463,23 @@ def street_scene():
         cell = (np.floor((p[:, 2] + 300.0) / 3.0).astype(int) + (12 if side == 2 else 0)) % 24
         for c in range(24):
             refl[shop & (cell == c)] = patch(c, wl)
-    radiance = refl * intensity[None] * (g / np.pi)[:, None]
-    lamp_l = intensity / (np.pi * lamp_r ** 2)
-    radiance[kind == 3] = lamp_l
-    road_l = xyz_of(patch("neutral-3.5", wl) * intensity * (1.0 / (lamp_h ** 2)) / np.pi, wl)[1]
-    sky_l = spd / xyz_of(spd, wl)[1] * 0.01 * road_l
-    radiance[kind == -1] = sky_l
-    radiance = radiance.reshape(HEIGHT, WIDTH, ss * ss, len(wl)).mean(2)
+    radiance = sum(refl * i_spd[None] * (g / np.pi)[:, None] for i_spd, g in groups)
+    for k in range(len(lamps)):
+        radiance[(kind == 3) & (lamp_id == k)] = intensities[k] / (np.pi * lamp_r ** 2)
+    road_l = xyz_of(patch("neutral-3.5", wl) * intensities[0] * (1.0 / (lamp_h ** 2)) / np.pi,
+                    wl)[1]
+    radiance[kind == -1] = sky_spd * sky_fraction * road_l
+    return radiance.reshape(HEIGHT, WIDTH, ss * ss, len(wl)).mean(2)
+
+
+def street_scene():
+    """Seven of specmap's `hps` lamps under a dark sky glowing with their light at 1%."""
+    wl = grid(780.0)
+    spd = light("light", "hps", wl)
+    spd = spd / xyz_of(spd, wl)[1]
+    radiance = street(wl, [spd] * 7, spd, 0.01)
     params = {"kind": "night street lit by high-pressure sodium lamps", "lamp": "hps",
-              "lamps": len(lamps), "right_light": "hps (HPS)"}
+              "lamps": 7, "right_light": "hps (HPS)"}
     return wl, radiance, params
 
 

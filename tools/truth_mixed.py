@@ -30,7 +30,7 @@ import numpy as np
 
 import colour
 
-from make_truth import (HEIGHT, WIDTH, box_hit, grid, latlong_dirs, light, patch, xyz_of)
+from make_truth import (HEIGHT, WIDTH, box_hit, grid, latlong_dirs, light, patch, street, xyz_of)
 
 SS = 4
 
@@ -181,65 +181,13 @@ def room_incandescent_dusk():
 
 
 def street_mixed():
-    """make_truth.py's street: six c100s54 sodium lamps and one luxeon-ww-2880 LED lamp."""
+    """make_truth.py's street: six c100s54 sodium lamps and one luxeon-ww-2880 LED lamp (15 m
+    ahead on the right) under a blue-hour sky at 2% of the road's luminance."""
     wl = grid(780.0)
-    eye = np.array([0.0, 1.6, 0.0])
-    half_w, facade_h, lamp_h, lamp_r = 6.0, 15.0, 7.0, 0.3
-    lamps = np.array([[4.5 if k % 2 == 0 else -4.5, lamp_h, 15.0 * (k - 3)] for k in range(7)])
     spds = [lamp("c100s54", wl)] * 7
-    spds[4] = lamp("luxeon-ww-2880", wl)  # the one LED lamp, 15 m ahead on the right
-    intensities = [s * 2000.0 for s in spds]
-    dirs = latlong_dirs(WIDTH, HEIGHT, SS).reshape(-1, 3)
-    t = np.full(len(dirs), np.inf)
-    kind = np.full(len(dirs), -1)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t_road = np.where(dirs[:, 1] < 0, -eye[1] / dirs[:, 1], np.inf)
-        t_fx = np.where(dirs[:, 0] > 0, (half_w - eye[0]) / dirs[:, 0],
-                        np.where(dirs[:, 0] < 0, (-half_w - eye[0]) / dirs[:, 0], np.inf))
-    y_at = eye[1] + t_fx * dirs[:, 1]
-    t_fx = np.where((y_at >= 0) & (y_at <= facade_h), t_fx, np.inf)
-    take = t_road < t
-    t[take], kind[take] = t_road[take], 0
-    take = t_fx < t
-    t[take], kind[take] = t_fx[take], np.where(dirs[take, 0] < 0, 1, 2)
-    lamp_id = np.full(len(dirs), -1)
-    for k, c in enumerate(lamps):
-        oc = eye - c
-        b = dirs @ oc
-        disc = b * b - (oc @ oc - lamp_r ** 2)
-        tl = np.where(disc > 0, -b - np.sqrt(np.maximum(disc, 0)), np.inf)
-        take = (tl > 0) & (tl < t)
-        t[take], kind[take], lamp_id[take] = tl[take], 3, k
-    p = eye + np.where(np.isfinite(t), t, 0)[:, None] * dirs
-    normals = np.zeros_like(p)
-    normals[kind == 0] = [0, 1, 0]
-    normals[kind == 1] = [1, 0, 0]
-    normals[kind == 2] = [-1, 0, 0]
-    surf = (kind == 0) | (kind == 1) | (kind == 2)
-    e = np.zeros((len(dirs), len(wl)))
-    for c, i_spd in zip(lamps, intensities):
-        v = c - p
-        r2 = (v * v).sum(-1)
-        cos_r = np.maximum(0.0, (v * normals).sum(-1) / np.sqrt(r2))
-        g = np.where(surf & (v[:, 1] > 0), cos_r / r2, 0.0)
-        e += g[:, None] * i_spd[None]
-    refl = np.zeros((len(dirs), len(wl)))
-    road = kind == 0
-    refl[road] = patch("neutral-3.5", wl)
-    refl[road & (np.abs(p[:, 0]) >= 4.0)] = patch("neutral-6.5", wl)
-    for side, base in ((1, "light-skin"), (2, "neutral-6.5")):
-        m = kind == side
-        refl[m] = patch(base, wl)
-        shop = m & (p[:, 1] >= 0.5) & (p[:, 1] <= 3.5)
-        cell = (np.floor((p[:, 2] + 300.0) / 3.0).astype(int) + (12 if side == 2 else 0)) % 24
-        for c in range(24):
-            refl[shop & (cell == c)] = patch(c, wl)
-    radiance = refl * e / np.pi
-    for k in range(len(lamps)):
-        radiance[(kind == 3) & (lamp_id == k)] = intensities[k] / (np.pi * lamp_r ** 2)
-    road_l = xyz_of(patch("neutral-3.5", wl) * intensities[0] / lamp_h ** 2 / np.pi, wl)[1]
-    radiance[kind == -1] = daylight(9000.0, wl) * 0.02 * road_l
-    return wl, average_pixels(radiance), {
+    spds[4] = lamp("luxeon-ww-2880", wl)
+    radiance = street(wl, spds, daylight(9000.0, wl), 0.02)
+    return wl, radiance, {
         "kind": "night street: six c100s54 sodium lamps, one luxeon-ww-2880 LED, blue-hour sky",
         "lamps": 7, "right_light": "sodium for six lamps, LED for one, daylight for the sky"}
 

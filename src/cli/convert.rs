@@ -388,16 +388,28 @@ impl ConvertOptionArgs {
     }
 }
 
-pub fn run(a: ConvertArgs) -> anyhow::Result<()> {
-    let opts = a.options.to_options()?;
+/// A guard that knows a conversion's inputs: the map (or its face files), the light CSVs and the
+/// `--fit` file.
+pub(super) fn input_guard(
+    input: &str,
+    opts: &ConvertOptions,
+    args: &ConvertOptionArgs,
+) -> super::guard::Guard {
     let mut guard = super::guard::Guard::new();
-    for file in convert::input_files(&a.input, &opts) {
+    for file in convert::input_files(input, opts) {
         guard.input("", file);
     }
-    if let Some(p) = a.options.fit_file() {
+    if let Some(p) = args.fit_file() {
         guard.input("--fit", p);
     }
-    guard.output("-o", &a.output).check()?;
+    guard
+}
+
+pub fn run(a: ConvertArgs) -> anyhow::Result<()> {
+    let opts = a.options.to_options()?;
+    input_guard(&a.input, &opts, &a.options)
+        .output("-o", &a.output)
+        .check()?;
     let is_exr = a
         .output
         .extension()

@@ -1,7 +1,7 @@
 //! `specmap inspect`: the scene analysis and the conversion plan of a map, without writing a
 //! spectral file; optionally drawn over the map.
 
-use super::convert::{light_lines, ConvertOptionArgs};
+use super::convert::{input_guard, light_lines, ConvertOptionArgs};
 use super::outln;
 use anyhow::Context;
 use clap::Args;
@@ -32,13 +32,7 @@ pub struct InspectArgs {
 
 pub fn run(a: InspectArgs) -> anyhow::Result<()> {
     let opts = a.options.to_options()?;
-    let mut guard = super::guard::Guard::new();
-    for file in convert::input_files(&a.input, &opts) {
-        guard.input("", file);
-    }
-    if let Some(p) = a.options.fit_file() {
-        guard.input("--fit", p);
-    }
+    let mut guard = input_guard(&a.input, &opts, &a.options);
     if let Some(o) = &a.overlay {
         if !o.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) {
             anyhow::bail!(

@@ -1417,6 +1417,27 @@ pub fn read_spectral_rows(path: &Path, mut f: impl FnMut(usize, &[f32])) -> Resu
     Ok(info)
 }
 
+/// The values of channel `name` of the first part as stored (no EV scale applied: a mask such as
+/// `sun` reads 0/1), if the file has it.
+pub fn read_stored_channel(path: &Path, name: &str) -> Option<Vec<f32>> {
+    use exr::prelude::*;
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_file(path)
+        .ok()?;
+    image
+        .layer_data
+        .channel_data
+        .list
+        .iter()
+        .find(|c| c.name == *name)
+        .map(|c| c.sample_data.values_as_f32().collect())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -72,12 +72,7 @@ pub fn write_overlay(path: &Path, map: &EnvMap, scene: &Scene) -> Result<Overlay
     let drawn =
         |e: String| Error::invalid(format!("{}: cannot draw the overlay: {e}", path.display()));
     draw_text(&mut rgb, (w, h), map_h, map, scene, &listed, zoom).map_err(drawn)?;
-    let img = image::RgbImage::from_raw(w as u32, h as u32, rgb)
-        .ok_or_else(|| drawn("the image buffer does not match its size".into()))?;
-    let mut png = Vec::new();
-    img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
-        .map_err(|e| drawn(e.to_string()))?;
-    crate::io::write_atomic(path, &png)?;
+    crate::plot::write_rgb_png(path, (w, h), rgb, "overlay")?;
     Ok(Overlay {
         image_size: [w, h],
         zoom,

@@ -55,26 +55,6 @@ fn preview_space(
     })
 }
 
-/// Reads the single float channel `name` of the first part, if the file has it.
-fn read_mask(path: &Path, name: &str) -> Option<Vec<f32>> {
-    use exr::prelude::*;
-    let image = read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .all_channels()
-        .first_valid_layer()
-        .all_attributes()
-        .from_file(path)
-        .ok()?;
-    image
-        .layer_data
-        .channel_data
-        .list
-        .iter()
-        .find(|c| c.name == *name)
-        .map(|c| c.sample_data.values_as_f32().collect())
-}
-
 /// Integrates every pixel's spectrum back to RGB and compares it with the preview channels.
 /// `heatmap`, if given, receives the per-pixel CIEDE2000 (row-major; NaN for a pixel not
 /// compared), for [`crate::envmap::heatmap::write_heatmap`].
@@ -160,7 +140,7 @@ pub fn round_trip_file(
     });
     let layout = detect(width, height, envmap).ok();
     let solid = layout.and_then(|l| EnvMap::new(l, RgbImage::new(width, height)).ok());
-    let sun = read_mask(path, "sun");
+    let sun = crate::envmap::exrio::read_stored_channel(path, "sun");
     let bands = wavelengths.len();
     let (mut all, mut no_sun) = (
         RoundTripAccumulator::default(),
