@@ -291,7 +291,7 @@ pub fn run(a: DemoArgs) -> anyhow::Result<()> {
 
     // 2. The map, converted as `specmap convert --light auto` does, and a small paper-mode copy.
     eprintln!(
-        "demo [2/5] convert: {} -> {} (--light auto), and a paper-mode copy",
+        "demo [2/5] convert: {} -> {} (every light of the scene), and a paper-mode copy",
         env_path.display(),
         out(&spectral_name).display()
     );
@@ -482,12 +482,19 @@ pub fn run(a: DemoArgs) -> anyhow::Result<()> {
     }
     let c = &run.converted.report;
     super::emit(&format!(
-        "wrote {}\ndemo: fitted D65 in 3 modes, converted {} (main light {}, sun {}), rendered 4 \
-         presets on {}, measured {} grids; {} files in {:.1} s. Open the page in a browser.\n",
+        "wrote {}\ndemo: fitted D65 in 3 modes, converted {} (lights: {}), rendered 4 presets on \
+         {}, measured {} grids; {} files in {:.1} s. Open the page in a browser.\n",
         index.display(),
         run.env,
-        c.light,
-        if c.sun.found { "found" } else { "not found" },
+        if c.lights.is_empty() {
+            "none found".to_string()
+        } else {
+            c.lights
+                .iter()
+                .map(|l| format!("{:?} {}", l.kind, l.spd).to_lowercase())
+                .collect::<Vec<_>>()
+                .join(", ")
+        },
         run.renderer,
         run.tradeoff.len(),
         files.len(),
