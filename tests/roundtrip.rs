@@ -37,6 +37,12 @@ fn room(path: &Path, dark: &[(usize, usize)]) {
     .unwrap();
 }
 
+/// Which of `room`'s colours (without dark pixels) is at `[x, y]`: a band index or the wall.
+fn colour_at(at: &serde_json::Value) -> Option<usize> {
+    let (x, y) = (at[0].as_u64().unwrap(), at[1].as_u64().unwrap());
+    (12..20).contains(&y).then_some(x as usize % 4)
+}
+
 #[test]
 fn near_black_pixels_are_counted_below_the_floor_not_in_the_maximum() {
     let d = tempfile::tempdir().unwrap();
@@ -111,9 +117,12 @@ fn convert_and_roundtrip_report_the_same_statistic_for_the_same_file() {
         );
         let mean = |v: &serde_json::Value| f(&v["weighted_mean_de2000"]);
         assert!((mean(a) - mean(b)).abs() < 1e-3, "{a} {b}");
-        for k in ["pixels", "max_at", "black_pixels"] {
+        for k in ["pixels", "black_pixels"] {
             assert_eq!(a[k], b[k], "{k}: {a} {b}");
         }
+        // Pixels of one colour tie to a few ulps (the file holds f32, the conversion measured
+        // f64), so the maximum may be found at another pixel of the same colour.
+        assert_eq!(colour_at(&a["max_at"]), colour_at(&b["max_at"]), "{a} {b}");
         assert_eq!(a["below_floor"]["pixels"], b["below_floor"]["pixels"]);
     }
     // In the paper's modes the pixels that do not keep their colour are counted as inexact
