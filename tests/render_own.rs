@@ -206,3 +206,39 @@ fn the_basis_form_renders_as_the_spectral_form_and_keeps_the_sun() {
         }
     }
 }
+
+#[test]
+fn a_basis_map_converted_with_sun_spd_a_is_lit_by_an_a_sun() {
+    use specmap::envmap::convert::SunSpd;
+    use specmap::render::LightSpectra;
+    let dir = tempfile::tempdir().unwrap();
+    let out = converted(
+        dir.path(),
+        "envmaps/sunrise.exr",
+        "a.exr",
+        ConvertOptions {
+            format: OutputFormat::Basis,
+            sun_spd: Some(SunSpd::Light("A".into())),
+            ..ConvertOptions::faithful()
+        },
+    );
+    let (l, r) = env::load(&out, "D65").unwrap();
+    assert!(l.sun.is_some(), "{r:?}");
+    let LightSpectra::Own { sun_spd, .. } = &l.spectra else {
+        panic!("a basis map is lit by its own spectra")
+    };
+    // Illuminant A's shape (the table, independent of the conversion), normalised at 560 nm.
+    let a = specmap::data::spectrum("A").unwrap().data;
+    let at = |t: &specmap::spectrum::Tabulated, nm: f64| {
+        let i = t.wavelengths_nm().iter().position(|&w| w == nm).unwrap();
+        t.values()[i]
+    };
+    for nm in [400.0, 450.0, 500.0, 600.0, 650.0, 700.0] {
+        let want = at(&a, nm) / at(&a, 560.0);
+        let got = at(sun_spd, nm) / at(sun_spd, 560.0);
+        assert!(
+            (got - want).abs() < 2e-3 * want,
+            "{nm} nm: {got} vs A's {want}"
+        );
+    }
+}

@@ -23,6 +23,8 @@ use std::sync::Arc;
 
 /// Rows of the lat-long a file map is resampled to before filtering.
 pub const SOURCE_ROWS: usize = 64;
+/// Rows of the lat-long the background is seen in (the lighting's is coarser: it is filtered).
+pub const BACKGROUND_ROWS: usize = 256;
 /// Rows of the diffuse irradiance map.
 pub const DIFFUSE_ROWS: usize = 16;
 /// Rows of each specular map.
@@ -88,6 +90,16 @@ impl CoeffMap {
     }
 }
 
+/// A file's map at two resolutions: the one the lighting is filtered from, and the one seen as
+/// the background (and behind transparent objects).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Maps {
+    /// [`SOURCE_ROWS`] rows.
+    pub light: CoeffMap,
+    /// Up to [`BACKGROUND_ROWS`] rows.
+    pub seen: CoeffMap,
+}
+
 /// The unit direction of texel (x, y) of a `w x h` lat-long.
 pub fn direction(w: usize, h: usize, x: usize, y: usize) -> [f64; 3] {
     let lon = -2.0 * PI * ((x as f64 + 0.5) / w as f64 - 0.5);
@@ -151,7 +163,7 @@ pub struct Filtered {
 
 /// Pre-filters an environment for the given shininess values.
 pub fn prefilter(env: &Environment, shininess: &[f64]) -> Filtered {
-    let source: Arc<CoeffMap> = match env {
+    let (source, seen): (Arc<CoeffMap>, Option<&CoeffMap>) = match env {
         Environment::Uniform { radiance } => {
             let c = CoeffMap::constant([0.0, 0.0, 0.0, *radiance as f32]);
             return Filtered {
@@ -167,13 +179,14 @@ pub fn prefilter(env: &Environment, shininess: &[f64]) -> Filtered {
         } => {
             let (sky, ground) = (*sky, *ground);
             let b = blend_deg.to_radians().sin().max(1e-6);
-            Arc::new(CoeffMap::from_fn(SOURCE_ROWS, |d| {
+            let m = CoeffMap::from_fn(SOURCE_ROWS, |d| {
                 let t = ((d[1] / b) * 0.5 + 0.5).clamp(0.0, 1.0);
                 let t = t * t * (3.0 - 2.0 * t);
                 [0.0, 0.0, 0.0, (ground + (sky - ground) * t) as f32]
-            }))
+            });
+            (Arc::new(m), None)
         }
-        Environment::Map(m) => m.clone(),
+        Environment::Map(m) => (Arc::new(m.light.clone()), Some(&m.seen)),
     };
     let src = &*source;
     let dirs: Vec<([f64; 3], f64)> = (0..src.width * src.height)
@@ -207,7 +220,7 @@ pub fn prefilter(env: &Environment, shininess: &[f64]) -> Filtered {
         })
         .collect();
     Filtered {
-        background: src.clone(),
+        background: seen.cloned().unwrap_or_else(|| src.clone()),
         diffuse,
         specular,
     }
@@ -314,12 +327,7 @@ fn fit_upsampler(light: &str, basis: [&str; 3], space: RgbSpace) -> Result<(Upsa
 }
 
 /// The paper's lighting of a light and basis by name, its sun given [`SUN_SPD`].
-fn paper_lighting(
-    light: &str,
-    basis: [&str; 3],
-    env: CoeffMap,
-    sun: Option<Sun>,
-) -> Result<Lighting> {
+fn paper_lighting(light: &str, basis: [&str; 3], env: Maps, sun: Option<Sun>) -> Result<Lighting> {
     let l = crate::data::spectrum(light)?;
     let [a, b, c] = basis.map(crate::data::spectrum);
     let e = crate::data::spectrum(SUN_SPD)?;
@@ -388,9 +396,14 @@ fn directional(map: &EnvMap, s: &[f64]) -> Option<Sun> {
     })
 }
 
-/// Resamples a map (any layout) to the renderer's lat-long and expands each texel with `f`.
-fn to_coefficients(map: &EnvMap, f: impl Fn([f32; 3]) -> [f64; 3] + Sync) -> CoeffMap {
-    let ll = map.resample(Layout::LatLong, SOURCE_ROWS);
+/// Resamples a map (any layout) to the renderer's lat-long of `rows` rows and expands each
+/// texel with `f`.
+fn to_coefficients(
+    map: &EnvMap,
+    rows: usize,
+    f: &(impl Fn([f32; 3]) -> [f64; 3] + Sync),
+) -> CoeffMap {
+    let ll = map.resample(Layout::LatLong, rows);
     let texels = ll
         .image
         .pixels
@@ -406,6 +419,20 @@ fn to_coefficients(map: &EnvMap, f: impl Fn([f32; 3]) -> [f64; 3] + Sync) -> Coe
         groups: 1,
         texels,
     }
+}
+
+/// The lighting's map of `map` and the background's of `seen` (the same map with its sun), each
+/// texel expanded with `f`; the background at most as fine as the map.
+fn maps(map: &EnvMap, seen: &EnvMap, f: impl Fn([f32; 3]) -> [f64; 3] + Sync) -> Maps {
+    Maps {
+        light: to_coefficients(map, SOURCE_ROWS, &f),
+        seen: to_coefficients(seen, seen_rows(seen), &f),
+    }
+}
+
+fn seen_rows(map: &EnvMap) -> usize {
+    let rows = (map.used_pixels() as f64 / 2.0).sqrt() as usize;
+    rows.clamp(SOURCE_ROWS, BACKGROUND_ROWS)
 }
 
 /// The map, its size and its RGB space (its `chromaticities`, else sRGB as OpenEXR has it).
@@ -432,6 +459,7 @@ fn read_map(path: &Path) -> Result<(EnvMap, [usize; 2], RgbSpace)> {
 
 fn load_rgb(path: &Path, light: &str) -> Result<(Lighting, EnvReport)> {
     let (mut map, input_size, space) = read_map(path)?;
+    let seen = map.clone();
     let search = find_sun(&map, &space, &SunSettings::default());
     let m = space.to_xyz_matrix();
     let y_row = [m[(1, 0)], m[(1, 1)], m[(1, 2)]];
@@ -446,7 +474,7 @@ fn load_rgb(path: &Path, light: &str) -> Result<(Lighting, EnvReport)> {
     let sun = directional(&map, &s);
     let basis = fit::PAPER_BASIS;
     let (up, light_label) = fit_upsampler(light, basis, space)?;
-    let coeffs = to_coefficients(&map, |p| {
+    let coeffs = maps(&map, &seen, |p| {
         up.coefficients([p[0] as f64, p[1] as f64, p[2] as f64])
     });
     let report = EnvReport {
@@ -564,8 +592,19 @@ fn load_basis(path: &Path) -> Result<(Lighting, EnvReport)> {
     let map = EnvMap::new(layout, c_img)
         .map_err(|e| Error::invalid(format!("{}: {e}", path.display())))?;
     let sun = directional(&map, &s);
-    // Coefficients resample linearly (negative ones included: EnvMap's filter is linear).
-    let coeffs = to_coefficients(&map, |p| [p[0] as f64, p[1] as f64, p[2] as f64]);
+    // Coefficients resample linearly (negative ones included: EnvMap's filter is linear). The
+    // background shows the sun: its pixels' fourth coefficient, on the sun's SPD.
+    let mut coeffs = maps(&map, &map, |p| [p[0] as f64, p[1] as f64, p[2] as f64]);
+    let mut sun_img = RgbImage::new(w, h);
+    for (p, v) in sun_img.pixels.iter_mut().zip(&s) {
+        p[0] = *v as f32;
+    }
+    let sun_map = EnvMap::new(layout, sun_img)
+        .map_err(|e| Error::invalid(format!("{}: {e}", path.display())))?;
+    let sun_seen = sun_map.resample(Layout::LatLong, coeffs.seen.height);
+    for (t, p) in coeffs.seen.texels.iter_mut().zip(&sun_seen.image.pixels) {
+        t[3] = p[0];
+    }
     let names = [&basis_names[0], &basis_names[1], &basis_names[2]].map(|s| s.trim());
     // The spectra the file stores are the ones its pixels were made of: use them (the names
     // are a fallback for files written before they were stored).
@@ -600,8 +639,9 @@ fn load_basis(path: &Path) -> Result<(Lighting, EnvReport)> {
         ))
     };
     let (lit, sun_label) = match stored {
-        Some((spectra, sun_spd)) => {
+        Some((mut spectra, sun_spd)) => {
             let label = "the file's sunSPD".to_string();
+            spectra.push(sun_spd.clone());
             let lit = Lighting {
                 label: light.clone(),
                 spectra: LightSpectra::Own {
@@ -628,7 +668,7 @@ fn load_basis(path: &Path) -> Result<(Lighting, EnvReport)> {
         sun_spd: sun_label,
         sun_direction: sun.map(|s| s.direction),
         sun_irradiance: sun.map(|s| s.irradiance),
-        spectra: 3,
+        spectra: 4,
         projection: None,
     };
     Ok((lit, report))

@@ -156,7 +156,7 @@ pub enum Environment {
     },
     /// A map in coefficient space: per texel one coefficient per spectrum of the lighting
     /// ([`LightSpectra`]: c_R, c_G, c_B on the basis and s on E, or the map's own K), from a file.
-    Map(Arc<env::CoeffMap>),
+    Map(Arc<env::Maps>),
 }
 
 /// A directional light: unit direction towards the light and irradiance at normal incidence in

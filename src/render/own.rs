@@ -119,11 +119,44 @@ impl Texels {
     }
 }
 
-/// The renderer's lat-long rows for a map of `used` pixels: at least two source pixels a texel
-/// side, at most [`env::SOURCE_ROWS`].
-fn rows_for(used: usize) -> usize {
+/// The lat-long rows for a map of `used` pixels: at least two source pixels a texel side, at
+/// most `max`.
+fn rows_for(used: usize, max: usize) -> usize {
     let latlong_rows = ((used as f64) / 2.0).sqrt();
-    ((latlong_rows / 2.0).floor() as usize).clamp(1, env::SOURCE_ROWS)
+    ((latlong_rows / 2.0).floor() as usize).clamp(1, max)
+}
+
+/// The lighting's texels and the background's ([`env::Maps`]), filled together.
+struct TexelPair {
+    light: Texels,
+    seen: Texels,
+}
+
+impl TexelPair {
+    fn new(used: usize, per: usize) -> TexelPair {
+        TexelPair {
+            light: Texels::new(rows_for(used, env::SOURCE_ROWS), per),
+            seen: Texels::new(rows_for(used, env::BACKGROUND_ROWS), per),
+        }
+    }
+
+    fn add(&mut self, d: [f64; 3], omega: f64, values: &[f64]) {
+        self.light.add(d, omega, values);
+        self.seen.add(d, omega, values);
+    }
+
+    /// Both as coefficient maps of `k` values a texel, each from its values by `f`.
+    fn pack(self, k: usize, f: impl Fn(&[f64], &mut [f64])) -> env::Maps {
+        let per = self.light.per;
+        let one = |t: Texels| {
+            let (w, h) = (t.w, t.h);
+            pack(&t.finish(), per, k, w, h, &f)
+        };
+        env::Maps {
+            light: one(self.light),
+            seen: one(self.seen),
+        }
+    }
 }
 
 fn layout_of(path: &Path, w: usize, h: usize, attr: Option<EnvmapAttr>) -> Result<Layout> {
@@ -223,7 +256,7 @@ pub fn load_spectral(path: &Path, spectra: Spectra) -> Result<(Lighting, EnvRepo
     let colour = Colour::new(&wl)?;
     let geo = geometry(path, layout_of(path, w, h, info.envmap)?, w, h)?;
     let mask = sun_mask(path, &geo, n, &colour)?;
-    let mut texels = Texels::new(rows_for(geo.used_pixels()), n);
+    let mut texels = TexelPair::new(geo.used_pixels(), n);
     let mut sun = SunSum {
         spectrum: vec![0.0; n],
         dir: [0.0; 3],
@@ -258,9 +291,11 @@ pub fn load_spectral(path: &Path, spectra: Spectra) -> Result<(Lighting, EnvRepo
                 for (a, dk) in sun.dir.iter_mut().zip(d) {
                     *a += omega * yl * dk;
                 }
-                // The sun's solid angle stays in its texel, dark: its light is the sun's now.
+                // The background shows the sun; the lighting's texel keeps the sun's solid angle,
+                // dark: its light is the directional light's now.
+                texels.seen.add(d, omega, &px);
                 px.iter_mut().for_each(|v| *v = 0.0);
-                texels.add(d, omega, &px);
+                texels.light.add(d, omega, &px);
             } else {
                 texels.add(d, omega, &px);
             }
@@ -269,8 +304,6 @@ pub fn load_spectral(path: &Path, spectra: Spectra) -> Result<(Lighting, EnvRepo
     if let Some((x, y, v)) = too_large {
         return Err(too_bright(path, x, y, v));
     }
-    let (tw, th) = (texels.w, texels.h);
-    let values = texels.finish();
     let sun = sun.light(&colour, &wl)?;
     let text = |name: &str| {
         info.attributes.iter().find_map(|(k, v)| match v {
@@ -281,19 +314,22 @@ pub fn load_spectral(path: &Path, spectra: Spectra) -> Result<(Lighting, EnvRepo
     let light = text("specmap.light").unwrap_or_else(|| "the file's own spectra".into());
     let (basis, coeffs, projection) = match spectra {
         Spectra::Full => {
-            let k = n;
             let basis: Vec<Vec<f64>> = (0..n)
                 .map(|j| (0..n).map(|i| (i == j) as u8 as f64).collect())
                 .collect();
-            (
-                basis,
-                pack(&values, n, k, tw, th, |s, out| out.copy_from_slice(s)),
-                None,
-            )
+            (basis, texels.pack(n, |s, out| out.copy_from_slice(s)), None)
         }
         Spectra::Own => {
-            let (basis, coeffs, p) = project(&values, n, tw, th, &colour)?;
-            (basis, coeffs, Some(p))
+            let (tw, th) = (texels.light.w, texels.light.h);
+            let light_values = std::mem::replace(&mut texels.light, Texels::new(1, 0)).finish();
+            let (basis, p) = project(&light_values, n, tw, th, &colour)?;
+            let f = |s: &[f64], out: &mut [f64]| basis.project(s, out);
+            let (sw, sh) = (texels.seen.w, texels.seen.h);
+            let maps = env::Maps {
+                light: pack(&light_values, n, basis.len(), tw, th, &f),
+                seen: pack(&texels.seen.finish(), n, basis.len(), sw, sh, &f),
+            };
+            (basis.spectra.clone(), maps, Some(p))
         }
     };
     let (sun_dir, sun_irr) = (
@@ -349,7 +385,7 @@ fn pack(
     k: usize,
     w: usize,
     h: usize,
-    f: impl Fn(&[f64], &mut [f64]),
+    f: &impl Fn(&[f64], &mut [f64]),
 ) -> CoeffMap {
     let groups = k.div_ceil(4).max(1);
     let mut texels = vec![[0f32; 4]; w * h * groups];
@@ -375,7 +411,7 @@ fn project(
     w: usize,
     h: usize,
     colour: &Colour,
-) -> Result<(Vec<Vec<f64>>, CoeffMap, Projection)> {
+) -> Result<(OwnBasis, Projection)> {
     let mut m = Moments::new(n);
     for t in 0..w * h {
         let s = &values[t * n..(t + 1) * n];
@@ -383,7 +419,6 @@ fn project(
     }
     let basis = OwnBasis::from_moments(&m, &colour.weights, DEFAULT_DISCARD, MAX_K)?;
     let k = basis.len();
-    let coeffs = pack(values, n, k, w, h, |s, out| basis.project(s, out));
     let (mut worst, mut at, mut sum, mut weight) = (0.0f64, 0usize, 0.0, 0.0);
     let mut c = vec![0.0; k];
     for t in 0..w * h {
@@ -423,7 +458,7 @@ fn project(
         keeps_colour: basis.keeps_colour,
         summary,
     };
-    Ok((basis.spectra.clone(), coeffs, p))
+    Ok((basis, p))
 }
 
 /// Loads a basis OpenEXR of the K-spectrum form (`specmap convert --format basis`, version 2):
@@ -508,7 +543,7 @@ pub fn load_basis_k(path: &Path) -> Result<(Lighting, EnvReport)> {
             _ => None,
         });
     let geo = geometry(path, layout_of(path, w, h, envmap)?, w, h)?;
-    let mut texels = Texels::new(rows_for(geo.used_pixels()), k);
+    let mut texels = TexelPair::new(geo.used_pixels(), k);
     let mut sun = SunSum {
         spectrum: vec![0.0; wl.len()],
         dir: [0.0; 3],
@@ -540,14 +575,15 @@ pub fn load_basis_k(path: &Path) -> Result<(Lighting, EnvReport)> {
                         *acc += omega * a * sy * dq;
                     }
                 }
+                texels.seen.add(d, omega, &c);
                 c[si] = 0.0;
+                texels.light.add(d, omega, &c);
+                continue;
             }
             texels.add(d, omega, &c);
         }
     }
-    let (tw, th) = (texels.w, texels.h);
-    let values = texels.finish();
-    let coeffs = pack(&values, k, k, tw, th, |s, out| out.copy_from_slice(s));
+    let coeffs = texels.pack(k, |s, out| out.copy_from_slice(s));
     let sun = sun.light(&colour, &wl)?;
     let light = match get("specmap.light") {
         Some(AttrValue::Text(t)) => t,

@@ -242,7 +242,7 @@ impl Prepared {
             let sun_offset = offset(&spectra)?;
             spectra.extend(sun_spd.iter().map(|&v| v as f32));
             let map_groups = match &l.environment {
-                super::Environment::Map(m) => m.groups,
+                super::Environment::Map(m) => m.light.groups,
                 _ => 1,
             };
             if map_groups != groups {

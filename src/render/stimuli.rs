@@ -87,7 +87,10 @@ fn radiated(l: &Lighting) -> Vec<Radiated> {
             // A map's own spectra may go negative (principal components): what it radiates is
             // the spectra of its brightest and most different texels.
             if let Environment::Map(m) = &l.environment {
-                for (k, s) in representative_spectra(m, spectra).into_iter().enumerate() {
+                for (k, s) in representative_spectra(&m.light, spectra)
+                    .into_iter()
+                    .enumerate()
+                {
                     out.push(Radiated {
                         label: format!("texel spectrum {} of {}", k + 1, l.label),
                         light: s,
@@ -182,8 +185,9 @@ fn environment_peak(env: &Environment) -> f64 {
         Environment::Uniform { radiance } => radiance.abs(),
         Environment::SkyGround { sky, ground, .. } => sky.abs().max(ground.abs()),
         Environment::Map(m) => m
+            .light
             .texels
-            .chunks(m.groups)
+            .chunks(m.light.groups)
             .map(|t| t.iter().flatten().map(|v| (*v as f64).abs()).sum::<f64>())
             .fold(0.0, f64::max),
     }
