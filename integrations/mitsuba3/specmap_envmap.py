@@ -157,8 +157,13 @@ def _read_basis_v1(path, header, channels):
     coef = np.stack([_channel(path, channels, c) for c in ("c_R", "c_G", "c_B")], -1)
     cube = (coef * _ev_scale(path, header)) @ basis
     if "sun" in channels and "specmap.sunSPD" in header:
-        sun = _floats(path, header, "specmap.sunSPD", n)
-        cube += channels["sun"].astype(np.float64)[..., None] * sun
+        weight = channels["sun"].astype(np.float64)
+        if not np.all(np.isfinite(weight)):
+            raise SpecmapMapError(
+                f"{path}: the sun channel holds values that are not finite (the basis writer "
+                f"stores it without the EV scale, so a bright sun overflows half floats): "
+                f"convert with --format basis --precision float")
+        cube += weight[..., None] * _floats(path, header, "specmap.sunSPD", n)
     return wavelengths, cube
 
 
