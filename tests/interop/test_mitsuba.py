@@ -537,14 +537,14 @@ def crop_mean(img, within=0.8 * 0.4 / 0.5):
     return img[disk_mask(img.shape[0], within)].mean(0)
 
 
-@pytest.mark.skipif(not has_checker_spheres(),
-                    reason="this specmap build has no `render --scene checker-spheres` preset "
-                           "(being added on main)")
 def test_colorchecker_spheres_match_specmaps_renderer(plugin, maps, tmp_path):
     """The 24 ColorChecker spheres under sunrise (its sun a texel here, a directional light in
     specmap's renderer): each sphere rendered alone in Mitsuba with this emitter, its interior
     mean (0.8 of the radius) against specmap's render of the same pixels; CIEDE2000 per patch,
     both scaled by the white patch's luminance in specmap's render, mean < 1.0."""
+    if not has_checker_spheres():
+        pytest.skip("this specmap build has no `render --scene checker-spheres` preset (being "
+                    "added on main)")
     env = maps["sunrise-128"]["spectral"]
     ref_img = specmap_checker(env, tmp_path / "checker.exr")
     names, _, _ = colorchecker()
@@ -615,3 +615,22 @@ def test_colorchecker_spheres_match_numerical_integration(plugin, maps):
     de = de2000(want, got, luminance(want[names.index("white-9.5")]))
     print("CIEDE2000 per patch", dict(zip(names, np.round(de, 2))), "mean", de.mean())
     assert de.mean() < 0.5, (de.mean(), de.max())
+
+
+# ----------------------------------------------------------------------------- light tracing
+
+def test_light_tracing_agrees_with_path_sampling(plugin, maps):
+    """Mitsuba's particle tracer starts paths at the emitter (sample_ray, sample_wavelengths,
+    the scene's bounding sphere from fit_to_scene): the white sphere's centre comes out as
+    bright as the direct integrator makes it (emitter and BSDF sampling), within 4 %."""
+    means = []
+    for integrator, spp in (({"type": "direct"}, 64),
+                            ({"type": "ptracer", "max_depth": 2, "hide_emitters": True}, 256)):
+        scene = sphere_scene(envmap(maps["forest"]["spectral"], "spectral"), [0, 0, 1],
+                             integrator)
+        scene["sensor"] = {"type": "perspective", "fov": 12, "film": film(16, 16),
+                           "to_world": mi.ScalarTransform4f().look_at([0, 0, 8], [0, 0, 0],
+                                                                      [0, 1, 0])}
+        img = render(plugin, scene, spp)
+        means.append(luminance(img[disk_mask(16, 0.6)].mean(0)))
+    assert means[1] == pytest.approx(means[0], rel=0.04), means
