@@ -50,6 +50,11 @@ Radiometric scale (derived from Mitsuba's source, ``include/mitsuba/core/spectru
   :func:`radiometric_factor` computes at load time from Mitsuba's own ``cie1931_y`` and
   ``cie_d65``. The emitter returns k * scale * L_s.
 
+Between texels the radiance is interpolated bilinearly. Mitsuba's ``envmap`` instead multiplies
+the bilinear mean of its model's spectra by the bilinear mean of their scales, which next to a
+bright texel (a sun) loses energy: on maps with sharp texel-to-texel contrast the two emitters
+differ by that (docs/mitsuba.md, tools/mitsuba_interpolation.py).
+
 Outside the file's wavelengths the radiance is 0 (as Mitsuba's ``regular`` spectrum). Mitsuba
 gives a Python emitter no ``set_scene`` call: use :func:`load_dict` / :func:`load_file`, or call
 :func:`fit_to_scene` after loading, so that shadow rays and emitted rays span the scene's
