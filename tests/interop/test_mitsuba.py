@@ -204,7 +204,8 @@ def test_map_seen_directly_matches_mitsubas_envmap(plugin, maps, name, kind):
         des.append(de2000(ref, got, luminance(ref).max()))
         ratios.append(luminance(got).sum() / luminance(ref).sum())
     des = np.concatenate([d.ravel() for d in des])
-    print(f"mean CIEDE2000 {des.mean():.3f} max {des.max():.3f}, luminance ratios {np.round(ratios, 4)}")
+    print(f"mean CIEDE2000 {des.mean():.3f} max {des.max():.3f}, "
+          f"luminance ratios {np.round(ratios, 4)}")
     assert des.mean() < 0.5, (des.mean(), des.max())
     np.testing.assert_allclose(ratios, 1.0, atol=ENERGY_TOLERANCE)
 
@@ -235,7 +236,8 @@ def sphere_scene(em, camera_dir, integrator=None, reflectance=None):
             "ball": {"type": "sphere", "radius": 1.0,
                      "bsdf": {"type": "diffuse", "reflectance": reflectance or
                               {"type": "spectrum", "value": 0.8}}},
-            "sensor": {"type": "orthographic", "film": film(24, 24), "sampler": {"type": "ldsampler"},
+            "sensor": {"type": "orthographic", "film": film(24, 24),
+                       "sampler": {"type": "ldsampler"},
                        "to_world": mi.ScalarTransform4f().look_at(eye.tolist(), [0, 0, 0], up)}}
 
 
@@ -265,8 +267,9 @@ def disk_regions(img, grid=3, within=0.8):
 def test_white_sphere_matches_mitsubas_envmap(plugin, maps, name):
     """A white (0.8) Lambertian sphere lit by the map, seen from four sides: this emitter
     (importance-sampled, MIS with the BSDF) and Mitsuba's envmap agree to CIEDE2000 < 0.5 over
-    the means of 9 regions of the disk's interior, total luminance within ENERGY_TOLERANCE. Both renders
-    use the same sample streams (common random numbers: the noise they share cancels)."""
+    the means of 9 regions of the disk's interior, total luminance within ENERGY_TOLERANCE.
+    Both renders use the same sample streams (common random numbers: the noise they share
+    cancels)."""
     des, ratios = [], []
     for side in ([0, 0, 1], [1, 0, 0], [0, 0, -1], [-0.7, 0.3, 0.6]):
         ref = disk_regions(render(plugin, sphere_scene(envmap(maps[name]["rgb"], "rgb"), side),
@@ -276,7 +279,8 @@ def test_white_sphere_matches_mitsubas_envmap(plugin, maps, name):
         des.append(de2000(ref, got, luminance(ref).max()))
         ratios.append(luminance(got).sum() / luminance(ref).sum())
     des = np.concatenate(des)
-    print(f"mean CIEDE2000 {des.mean():.3f} max {des.max():.3f}, luminance ratios {np.round(ratios, 4)}")
+    print(f"mean CIEDE2000 {des.mean():.3f} max {des.max():.3f}, "
+          f"luminance ratios {np.round(ratios, 4)}")
     assert des.mean() < 0.5, (des.mean(), des.max())
     np.testing.assert_allclose(ratios, 1.0, atol=ENERGY_TOLERANCE)
 
@@ -297,8 +301,7 @@ def specmap_directions(w, h):
 def eval_at(emitter, dirs, wavelengths):
     """The emitter's radiance seen along `dirs` (n, 3) at four wavelengths: (n, 4)."""
     if dr_is_jit():
-        si = mi.SurfaceInteraction3f()
-        si = type(si)()  # a JIT record of width 1, widened by the assignments
+        si = mi.SurfaceInteraction3f()  # width 1, widened by the assignments
         si.wi = mi.Vector3f(*(-dirs.T.astype(np.float32)))
         si.wavelengths = mi.Spectrum(*[mi.Float(np.full(len(dirs), l, np.float32))
                                        for l in wavelengths])
@@ -519,13 +522,13 @@ def one_sphere_scene(env, wavelengths, reflectance):
     pitch = 4.0 / CHECKER_SIZE[1]
     half = 16 * pitch
     n = 32 // CHECKER_BIN
+    value = [(float(l), float(v)) for l, v in zip(wavelengths, reflectance)]
     return {"type": "scene",
             "env": {"type": "specmap_envmap", "filename": str(env), "rows": "specmap"},
             "integrator": {"type": "direct"},
             "ball": {"type": "sphere", "radius": 0.4,
-                     "bsdf": {"type": "diffuse", "reflectance": {
-                         "type": "spectrum",
-                         "value": [(float(l), float(v)) for l, v in zip(wavelengths, reflectance)]}}},
+                     "bsdf": {"type": "diffuse",
+                              "reflectance": {"type": "spectrum", "value": value}}},
             "sensor": {"type": "orthographic", "film": film(n, n), "sampler": {"type": "ldsampler"},
                        "to_world": mi.ScalarTransform4f().look_at([0, 0, 10], [0, 0, 0], [0, 1, 0])
                        @ mi.ScalarTransform4f().scale([half, half, 1])}}
