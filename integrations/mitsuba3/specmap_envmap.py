@@ -309,8 +309,8 @@ class SpecmapEnvmap(mi.Emitter):
         self.rows = str(props.get("rows", "mitsuba"))
         if self.rows not in ROWS:
             raise ValueError(f"{PLUGIN}: rows = {self.rows!r}, expected one of {ROWS}")
-        to_world = props.get("to_world", mi.ScalarTransform4f())
-        self._to_world = mi.Transform4f(to_world)
+        to_world = props.get("to_world", mi.ScalarTransform4f())  # double precision
+        self._to_world = mi.Transform4f(np.array(to_world.matrix, dtype=np.float32))
         self._to_local = self._to_world.inverse()
         self.kind, wavelengths, cube = read_map(self.filename)
         self._load(wavelengths, cube)
