@@ -372,6 +372,10 @@ class SpecmapEnvmap(mi.Emitter):
     def _eval_spectrum(self, uv, wavelengths, active):
         """Radiance at texture coordinates uv and the query's wavelengths: bilinear in space,
         linear in wavelength between the file's bands, 0 outside them."""
+        if not _is_jit():
+            if not active:
+                return mi.UnpolarizedSpectrum(0.0)
+            return mi.UnpolarizedSpectrum(self._eval_scalar(uv.x, uv.y, wavelengths)) * self.scale
         corners = self._corners(uv)
         n = self.bands
         lanes = []
@@ -388,6 +392,36 @@ class SpecmapEnvmap(mi.Emitter):
                 acc = acc + weight * ((1.0 - ft) * a + ft * b)
             lanes.append(dr.select(inside, acc, 0.0))
         return mi.UnpolarizedSpectrum(lanes) * self.scale
+
+    def _eval_scalar(self, u, v, wavelengths):
+        """_eval_spectrum's arithmetic on Python floats (scalar variants call the emitter once
+        per query, where Dr.Jit's dispatch on scalars costs more than the arithmetic)."""
+        w, h, n = self.width, self.height, self.bands
+        xf = (u - math.floor(u)) * w - 0.5
+        x0 = math.floor(xf)
+        fx = xf - x0
+        x0, x1 = x0 % w, (x0 + 1) % w
+        v = min(max(v, 0.0), 1.0)
+        yf = v * (h - 1) if self.rows == "mitsuba" else min(max(v * h - 0.5, 0.0), h - 1.0)
+        y0 = min(math.floor(yf), h - 2)
+        fy = yf - y0
+        r0, r1 = y0 * w, (y0 + 1) * w
+        corners = ((r0 + x0, (1 - fx) * (1 - fy)), (r0 + x1, fx * (1 - fy)),
+                   (r1 + x0, (1 - fx) * fy), (r1 + x1, fx * fy))
+        data, out = self._data, []
+        for lam in wavelengths:
+            t = (lam - self.lambda0) / self.step
+            if not 0.0 <= t <= n - 1.0:
+                out.append(0.0)
+                continue
+            b0 = min(int(t), n - 2)
+            ft = t - b0
+            acc = 0.0
+            for texel, weight in corners:
+                i = texel * n + b0
+                acc += weight * ((1.0 - ft) * data[i] + ft * data[i + 1])
+            out.append(acc)
+        return out
 
     # ------------------------------------------------------------------ mappings
 
