@@ -371,6 +371,17 @@ def rgb_of_spectra(spectra, wavelengths):
     return colour.XYZ_to_RGB(xyz, "sRGB")
 
 
+def basis_version(path):
+    """2 for a basis v2 file (specmap.basisVersion), else 1."""
+    header, _ = read_channels(path)
+    return int(header.get("specmap.basisVersion", 1))
+
+
+def needs_v1(path):
+    if basis_version(path) != 1:
+        pytest.skip("this specmap writes basis v2 for --format basis: no v1 file to read")
+
+
 def basis_emitter(path):
     return mi.load_dict({"type": "specmap_envmap", "filename": str(path), "rows": "specmap"})
 
@@ -380,6 +391,7 @@ def test_basis_v1_spectra_integrate_to_the_input_rgb(plugin, maps):
     sun channel): its texels' spectra integrate (colour-science) to the input RGB, and the sun
     texel keeps its luminance (its colour becomes daylight's, by design)."""
     path = maps["sunrise-128"]["basis"]
+    needs_v1(path)
     header, ch = read_channels(path)
     wl = np.asarray(header["specmap.wavelengths"], np.float64)
     _, src = read_channels(maps["sunrise-128"]["rgb"])
@@ -423,6 +435,7 @@ def test_basis_v2_reads_as_the_same_spectra(plugin, maps, tmp_path):
     radiance at every checked texel, sun included. (Written here to the v2 specification:
     specmap does not write v2 yet on this branch.)"""
     v1 = maps["sunrise-128"]["basis"]
+    needs_v1(v1)
     v2 = write_basis_v2(v1, tmp_path / "v2.exr")
     header, ch = read_channels(v1)
     h, w = ch["sun"].shape
@@ -433,6 +446,26 @@ def test_basis_v2_reads_as_the_same_spectra(plugin, maps, tmp_path):
     b = spectra_at(basis_emitter(v2), dirs, wl)
     assert basis_emitter(v2).kind == "basis-v2"
     np.testing.assert_allclose(b, a, rtol=1e-5, atol=1e-6 * np.abs(a).max())
+
+
+def test_basis_v2_from_specmap_matches_its_spectral_conversion(plugin, maps):
+    """specmap's own basis v2 output (--format basis, K spectra of the map's own, the sun's
+    among them, EV for the bright map) gives the spectra of the same map's spectral conversion
+    to 1 % at every checked texel (the writer reports every pixel held to better than 1 %)."""
+    for name in ("sunrise-128", "sunrise"):
+        basis, spectral = maps[name]["basis"], maps[name]["spectral"]
+        if basis_version(basis) != 2:
+            pytest.skip("this specmap writes basis v1 for --format basis")
+        a, b = basis_emitter(basis), basis_emitter(spectral)
+        assert a.kind == "basis-v2"
+        idx = sample_texels(a.width, a.height, n=150)
+        dirs = specmap_directions(a.width, a.height)[idx[:, 0], idx[:, 1]]
+        wl = np.arange(380.0, 781.0, 20.0)
+        got, want = spectra_at(a, dirs, wl), spectra_at(b, dirs, wl)
+        peak = np.abs(want).max(1)
+        lit = peak > 1e-3 * peak.max()
+        rel = np.abs(got - want).max(1)[lit] / peak[lit]
+        assert rel.max() < 0.01, (name, rel.max(), np.median(rel))
 
 
 # ----------------------------------------------------------------------------- clear errors
@@ -451,7 +484,9 @@ def test_a_file_of_neither_format_is_refused_by_name(plugin, maps):
 
 
 def test_a_v2_file_missing_a_basis_spectrum_is_refused(plugin, maps, tmp_path):
-    v2 = write_basis_v2(maps["sunrise-128"]["basis"], tmp_path / "v2.exr")
+    v2 = maps["sunrise-128"]["basis"]
+    if basis_version(v2) == 1:
+        v2 = write_basis_v2(v2, tmp_path / "v2.exr")
     header, ch = read_channels(v2)
     del header["specmap.basis01"]
     keep = {k: v for k, v in header.items() if k.startswith("specmap.") or k == "EV"}
@@ -476,6 +511,7 @@ def test_a_basis_file_whose_sun_overflowed_is_refused(plugin, maps, tmp_path):
     _, ch = read_channels(maps["sunrise-128"]["rgb"])
     write_rgb(src, np.stack([ch[c] for c in "RGB"], -1) * 100)
     basis = convert(src, tmp_path / "bright.basis.exr", "--format", "basis")
+    needs_v1(basis)
     _, out = read_channels(basis)
     if np.all(np.isfinite(out["sun"])):
         pytest.skip("the basis writer now scales the sun channel: nothing overflows")
