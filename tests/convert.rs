@@ -413,7 +413,7 @@ fn values_beyond_half_range_get_an_ev_scale_not_clipping() {
 }
 
 #[test]
-fn basis_format_has_four_channels_and_the_spectra_in_the_header() {
+fn basis_format_has_k_channels_and_the_spectra_in_the_header() {
     let d = tempfile::tempdir().unwrap();
     let out = d.path().join("basis.exr");
     let r = convert_json(&[
@@ -428,34 +428,38 @@ fn basis_format_has_four_channels_and_the_spectra_in_the_header() {
         "32",
         "--quiet",
     ]);
-    assert_eq!(r["channels"], 4);
-    // The default method cannot be written as three ColorChecker coefficients: the report says
-    // what was written instead.
-    assert_eq!(r["mode"], "exact");
-    assert!(
-        r["notes"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .any(|n| n.as_str().unwrap().contains("--format spectral")),
-        "{}",
-        r["notes"]
-    );
+    // The default method is written in its own spectra: K of them, the sun's among them.
+    assert_eq!(r["mode"], "faithful");
+    let k = r["basis"]["k"].as_u64().unwrap() as usize;
+    assert!((2..=32).contains(&k), "{}", r["basis"]);
+    assert_eq!(r["basis"]["sun"], r["sun"]["found"], "{}", r["sun"]);
+    assert_eq!(r["channels"], k + 3);
     let meta = exr::meta::MetaData::read_from_file(&out, false).unwrap();
     let h = &meta.headers[0];
-    let names: Vec<String> = h.channels.list.iter().map(|c| c.name.to_string()).collect();
-    assert_eq!(names, ["c_B", "c_G", "c_R", "sun"]);
-    for key in [
-        "specmap.basis0",
-        "specmap.basis1",
-        "specmap.basis2",
-        "specmap.wavelengths",
-    ] {
+    let mut names: Vec<String> = h.channels.list.iter().map(|c| c.name.to_string()).collect();
+    names.sort();
+    let mut want: Vec<String> = (0..k).map(|j| format!("k{j:02}")).collect();
+    want.extend(["B", "G", "R"].map(String::from));
+    want.sort();
+    assert_eq!(names, want);
+    let mut keys = vec![
+        "specmap.basisVersion".to_string(),
+        "specmap.basisK".into(),
+        "specmap.basisSun".into(),
+        "specmap.wavelengths".into(),
+    ];
+    keys.extend((0..k).map(|j| format!("specmap.basis{j:02}")));
+    for key in keys {
         assert!(
-            h.own_attributes.other.contains_key(&Text::from(key)),
+            h.own_attributes
+                .other
+                .contains_key(&Text::from(key.as_str())),
             "{key} missing"
         );
     }
+    // No intermediate file is left beside the output.
+    let left: Vec<_> = std::fs::read_dir(d.path()).unwrap().collect();
+    assert_eq!(left.len(), 1);
 }
 
 /// `--white`: what RGB (1,1,1) means is chosen, reported, and recorded for `roundtrip`.

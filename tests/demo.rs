@@ -62,7 +62,8 @@ fn the_quick_demo_writes_a_page_whose_images_all_exist() {
     let dir = t.path().join("demo");
     let (page, json) = demo(&dir, &[]);
 
-    // The images: the basis plot, two heatmaps, four renders; each a PNG of its stated size.
+    // The images: the basis plot, two heatmaps, the lights, five renders; each a PNG of its
+    // stated size.
     let shown = images(&page);
     let expected: BTreeSet<String> = [
         "basis.png",
@@ -73,6 +74,7 @@ fn the_quick_demo_writes_a_page_whose_images_all_exist() {
         "transparent-ball.png",
         "cylinders.png",
         "chart.png",
+        "checker-spheres.png",
     ]
     .map(String::from)
     .into();

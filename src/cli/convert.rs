@@ -506,6 +506,25 @@ pub fn run(a: ConvertArgs) -> anyhow::Result<()> {
     }
     outln!(out, "  sun          {}", sun_text(r));
     outln!(out, "  output       {}", output_text(r));
+    if let Some(b) = &r.basis {
+        outln!(
+            out,
+            "  basis form   {} spectra of the map's own{}: {:.1e} of the spectral energy outside \
+             them, {} pixels held to worse than 1% (worst {:.1}% at ({}, {})){}",
+            b.k,
+            if b.sun { ", the sun's among them" } else { "" },
+            b.discarded,
+            b.pixels_over_1_percent,
+            100.0 * b.max_residual,
+            b.max_residual_at[0],
+            b.max_residual_at[1],
+            if b.keeps_colour {
+                "; every pixel keeps its colour"
+            } else {
+                ""
+            }
+        );
+    }
     outln!(
         out,
         "  round trip   over {}",

@@ -114,7 +114,7 @@ impl Sizes {
         let (w, h) = match p {
             Preset::Ball | Preset::Cylinders => (256, 256),
             Preset::TransparentBall => (384, 192),
-            Preset::Chart => (384, 256),
+            Preset::Chart | Preset::CheckerSpheres => (384, 256),
         };
         (w / self.shrink, h / self.shrink)
     }
@@ -318,7 +318,7 @@ pub fn run(a: DemoArgs) -> anyhow::Result<()> {
     let inspected = inspect_map(&env_str, &dir, "lights.png")?;
     seconds.push(("convert", t.elapsed().as_secs_f64()));
 
-    // 3. The four presets under the converted map (the chart has its own three lights).
+    // 3. The presets under the converted map (the chart has its own three lights).
     let t = Instant::now();
     eprintln!(
         "demo [3/5] render: {} on {renderer}",

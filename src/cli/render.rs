@@ -40,7 +40,12 @@ pub struct RenderArgs {
     /// `specmap convert`.
     #[arg(long, value_name = "MAP")]
     env: Option<PathBuf>,
-    /// Main light: the uniform light without --env, the conversion's light with an RGB map.
+    /// What rays that miss every object see: the environment through a 60 degree field of
+    /// view (env), the environment straight behind the scene in one colour (flat), or black.
+    #[arg(long, value_enum, value_name = "KIND", default_value_t = BackgroundArg::Env)]
+    background: BackgroundArg,
+    /// Main light: the uniform light without --env, the conversion's light with an RGB map
+    /// (a spectral or basis map is lit by the spectra it holds; --light does not apply).
     #[arg(long, value_name = "LIGHT", default_value = "D65")]
     light: String,
     /// Film layers from the air side, INDEX:THICKNESS_NM[,...] (e.g. 2.7:270).
@@ -114,6 +119,13 @@ pub struct RenderArgs {
     repeats: usize,
 }
 
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum BackgroundArg {
+    Env,
+    Flat,
+    None,
+}
+
 #[derive(Debug, Clone, Copy, ValueEnum)]
 enum SceneArg {
     /// Fig. 6: chrome-oxide film 270 nm (n 2.7) on black plastic (1.45)
@@ -122,8 +134,11 @@ enum SceneArg {
     TransparentBall,
     /// Fig. 8: chrome oxide, thickness rising from 100 nm (left) to 400 nm (right)
     Cylinders,
-    /// Fig. 9: ColorChecker and plastic spheres under D65, A and low-pressure sodium
+    /// Fig. 9: ColorChecker and plastic spheres under D65, A and low-pressure sodium (one row
+    /// under --env)
     Chart,
+    /// The 24 ColorChecker reflectances as Lambertian spheres, 6 x 4
+    CheckerSpheres,
 }
 
 impl From<SceneArg> for Preset {
@@ -133,6 +148,7 @@ impl From<SceneArg> for Preset {
             SceneArg::TransparentBall => Preset::TransparentBall,
             SceneArg::Cylinders => Preset::Cylinders,
             SceneArg::Chart => Preset::Chart,
+            SceneArg::CheckerSpheres => Preset::CheckerSpheres,
         }
     }
 }
@@ -223,8 +239,8 @@ pub fn run(a: RenderArgs) -> anyhow::Result<()> {
         Some(s) => size(s)?,
         None => preset.default_size(),
     };
-    if preset == Preset::Chart && (a.env.is_some() || a.light != "D65") {
-        anyhow::bail!("the chart compares D65, A and low-pressure sodium side by side; --env and --light do not apply to it");
+    if preset == Preset::Chart && a.env.is_none() && a.light != "D65" {
+        anyhow::bail!("the chart compares D65, A and low-pressure sodium side by side; --light does not apply to it (--env lights one row of it)");
     }
     let output = a
         .output
@@ -260,6 +276,11 @@ pub fn run(a: RenderArgs) -> anyhow::Result<()> {
         None => (None, None),
     };
     let mut scene = preset.scene(w, h, &a.light, lighting)?;
+    scene.backdrop = match a.background {
+        BackgroundArg::Env => specmap::render::Backdrop::DEFAULT,
+        BackgroundArg::Flat => specmap::render::Backdrop::Flat,
+        BackgroundArg::None => specmap::render::Backdrop::Hidden,
+    };
     // Surface flags on the main objects.
     let layers = a.film.as_deref().map(film_layers).transpose()?;
     let substrate = a
@@ -438,7 +459,7 @@ pub fn run(a: RenderArgs) -> anyhow::Result<()> {
     if let Some(r) = &env_report {
         outln!(
             out,
-            "  environment {} ({}), main light {}, sun {}",
+            "  environment {} ({}), made under {}, sun {}",
             r.file,
             r.kind,
             r.light,
@@ -450,6 +471,15 @@ pub fn run(a: RenderArgs) -> anyhow::Result<()> {
                 None => "not found".into(),
             }
         );
+        match &r.projection {
+            Some(p) => outln!(out, "  lit by its own spectra: {}", p.summary),
+            None if !r.light_used => outln!(
+                out,
+                "  lit by the {} spectra the file stores (--light does not apply)",
+                r.spectra
+            ),
+            None => {}
+        }
     }
     outln!(
         out,

@@ -311,6 +311,8 @@ pub struct ConvertReport {
     /// Bright regions that are not lights, and why.
     pub bright_reflectors: Vec<String>,
     pub spectra: SpectraCount,
+    /// The basis form: how its K spectra hold the conversion's spectra.
+    pub basis: Option<super::basis_k::BasisStats>,
     /// The round trip over the pixels whose spectrum could not reproduce their colour (the
     /// nearest non-negative spectra, clipped lamp pixels, the paper mode's pixels but white; the
     /// sun aside).
@@ -476,7 +478,48 @@ pub fn convert(
         zip_level: opts.zip_level,
         attributes: attributes(&analysis, &plan),
     };
-    let written = write::write(&read.map, cells, &plan, file, output, progress)?;
+    // The basis form is factored from the spectral form: written first, as float, beside the
+    // output, then read twice (super::basis_k) and removed.
+    let basis_form = plan.format == OutputFormat::Basis;
+    let spectral_out = if basis_form {
+        plan.format = OutputFormat::Spectral;
+        intermediate(output)
+    } else {
+        output.to_path_buf()
+    };
+    let file = if basis_form {
+        FileSettings {
+            precision: write::Precisions {
+                precision: Precision::Float,
+                ev: None,
+                below_half: 0,
+                reason: None,
+            },
+            ..file
+        }
+    } else {
+        file
+    };
+    let written = write::write(&read.map, cells, &plan, file, &spectral_out, progress)?;
+    let (basis, bytes) = if basis_form {
+        let done = (|| {
+            let a = super::basis_k::analyse(&spectral_out)?;
+            super::basis_k::write(
+                &spectral_out,
+                &a,
+                output,
+                opts.precision,
+                opts.compression,
+                opts.zip_level,
+            )
+        })();
+        let _ = std::fs::remove_file(&spectral_out);
+        let (stats, bytes) = done?;
+        plan.format = OutputFormat::Basis;
+        (Some(stats), bytes)
+    } else {
+        (None, written.bytes)
+    };
     let size = [read.map.image.width, read.map.image.height];
     let megapixels = (read.size[0] * read.size[1]) as f64 / 1e6;
     Ok(ConvertReport {
@@ -493,7 +536,10 @@ pub fn convert(
             Precision::Float => "float",
         },
         compression: format!("{:?}", opts.compression).to_lowercase(),
-        ev: precisions.ev,
+        ev: match &basis {
+            Some(b) => b.ev,
+            None => precisions.ev,
+        },
         below_half: precisions.below_half,
         sanitized: read.sanitized,
         space: read.space.clone(),
@@ -517,8 +563,12 @@ pub fn convert(
         condition_number: plan.fit.condition_number,
         regularized: plan.fit.regularized,
         wavelengths_nm: plan.grid.wavelengths_nm().collect(),
-        channels: written.channels,
-        bytes: written.bytes,
+        channels: match &basis {
+            Some(b) => b.k + 3,
+            None => written.channels,
+        },
+        bytes,
+        basis,
         roundtrip_floor: written.roundtrip_floor,
         roundtrip: written.roundtrip,
         roundtrip_without_sun: written.roundtrip_without_sun,
@@ -658,6 +708,22 @@ pub const MAX_INPUT: f64 = 1e18;
 /// The most wavelength bands a spectral output holds (0.1 nm over 400 nm): each is a channel of
 /// every pixel, and the rows of a batch are held in memory.
 pub const MAX_BANDS: usize = 4001;
+
+/// A path beside `output` for the spectral form a basis form is factored from.
+fn intermediate(output: &Path) -> PathBuf {
+    let name = output
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let mut k = std::process::id();
+    loop {
+        let p = output.with_file_name(format!(".{name}.spectral-{k}.exr"));
+        if !p.exists() {
+            return p;
+        }
+        k = k.wrapping_add(1);
+    }
+}
 
 /// The default output path for an input: `NAME.spectral.exr` beside it.
 pub fn default_output(input: &str) -> PathBuf {

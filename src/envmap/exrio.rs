@@ -675,7 +675,7 @@ fn chromaticities_to_exr(c: &Chromaticities) -> exr::meta::attribute::Chromatici
     }
 }
 
-fn attr_from_exr(v: &AttributeValue) -> Option<AttrValue> {
+pub fn attr_from_exr(v: &AttributeValue) -> Option<AttrValue> {
     Some(match v {
         AttributeValue::Text(t) => AttrValue::Text(t.to_string()),
         AttributeValue::F64(x) => AttrValue::F64(*x),

@@ -667,7 +667,7 @@ impl EnvMap {
         out
     }
 
-    fn used_pixels(&self) -> usize {
+    pub fn used_pixels(&self) -> usize {
         let (w, h) = (self.image.width, self.image.height);
         match self.layout {
             Layout::HCross | Layout::VCross => w * h / 2,

@@ -1,6 +1,7 @@
 //! Environment maps: layouts and directions, EXR and HDR I/O, sun detection, and the conversion
 //! of RGB maps to spectral ones.
 
+pub mod basis_k;
 pub mod block;
 pub mod carriers;
 pub mod convert;
@@ -12,6 +13,7 @@ pub mod layout;
 pub mod light;
 pub mod metric;
 pub mod overlay;
+pub mod own_basis;
 pub mod plan;
 pub mod planes;
 pub mod roundtrip;

@@ -182,19 +182,8 @@ pub fn plan(analysis: &Analysis, opts: &ConvertOptions) -> Result<Plan> {
             opts.mode,
         )?,
     };
-    // The basis format holds three ColorChecker coefficients and a sun.
-    let method = match (opts.method, opts.format) {
-        (Method::Faithful, OutputFormat::Basis) => {
-            notes.push(
-                "--format basis stores three coefficients on the ColorChecker basis: every \
-                 pixel is written in the fit's mode on that basis (the faithful method's lights \
-                 and modulations need --format spectral)"
-                    .into(),
-            );
-            Method::Basis
-        }
-        (m, _) => m,
-    };
+    // The basis format holds the K spectra of whatever the method writes.
+    let method = opts.method;
     let sky = opts.sky.unwrap_or(match method {
         Method::Faithful => SkySpd::Daylight,
         Method::Basis => SkySpd::Light,

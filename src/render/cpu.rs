@@ -3,7 +3,8 @@
 
 use super::env;
 use super::prepare::{
-    CpuFilm, GpuObject, Prepared, CYLINDER_X, HAS_DIFFUSE, HAS_FILM, QUAD, SPHERE, TRANSPARENT,
+    CpuFilm, GpuObject, Prepared, CYLINDER_X, HAS_DIFFUSE, HAS_FILM, HIDE_BACKGROUND, QUAD, SPHERE,
+    TRANSPARENT,
 };
 use super::Image;
 use crate::thinfilm::{Film, Incidence, Polarization};
@@ -77,11 +78,23 @@ pub fn hit(objects: &[GpuObject], px: f64, py: f64) -> Option<(usize, [f64; 3])>
     })
 }
 
-fn map_sample(p: &Prepared, map: u32, dir: [f64; 3]) -> [f64; 4] {
-    let [off, w, h, _] = p.maps[map as usize];
+fn map_sample(p: &Prepared, map: u32, dir: [f64; 3]) -> Vec<f64> {
+    let [off, w, h, groups] = p.maps[map as usize];
     let off = off as usize;
-    let (w, h) = (w as usize, h as usize);
-    env::sample(&p.texels[off..off + w * h], w, h, dir)
+    let (w, h, g) = (w as usize, h as usize, groups as usize);
+    env::sample(&p.texels[off..off + w * h * g], w, h, g, dir)
+}
+
+/// The direction the background is seen in at pixel (x, y): a pinhole at the image centre
+/// with the vertical field of view of `params.view.w` (its half angle's tangent), looking
+/// down −Z; straight down −Z when that is 0.
+pub fn background_direction(p: &Prepared, x: usize, y: usize) -> [f64; 3] {
+    let t = p.params.view[3] as f64;
+    let (w, h) = (p.params.width as f64, p.params.height as f64);
+    let u = (x as f64 + 0.5 - 0.5 * w) / (0.5 * h) * t;
+    let v = -(y as f64 + 0.5 - 0.5 * h) / (0.5 * h) * t;
+    let n = (u * u + v * v + 1.0).sqrt();
+    [u / n, v / n, -1.0 / n]
 }
 
 fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
@@ -122,7 +135,13 @@ fn film_rt(f: &CpuFilm, i: usize, cos_v: f64, scale: Option<f64>) -> (f64, f64) 
 fn pixel(p: &Prepared, x: usize, y: usize) -> [f32; 3] {
     let n_wl = p.params.n_wl as usize;
     let sp = |off: u32, i: usize| p.spectra[off as usize + i] as f64;
-    let d = [0.0, 0.0, -1.0];
+    let expand = |c: &[f64], off: u32, i: usize| -> f64 {
+        c.iter()
+            .enumerate()
+            .map(|(j, c)| c * sp(off, j * n_wl + i))
+            .sum()
+    };
+    let d = background_direction(p, x, y);
     let mut xyz = [0.0f64; 3];
     let cmf = p.params.cmf_offset as usize;
     let mut add = |i: usize, l: f64| {
@@ -132,12 +151,12 @@ fn pixel(p: &Prepared, x: usize, y: usize) -> [f32; 3] {
     };
     let [px, py] = pixel_position(p, x, y);
     match hit(&p.objects, px, py) {
+        None if p.params.flags & HIDE_BACKGROUND != 0 => {}
         None => {
             let lt = &p.lightings[p.params.background as usize];
             let c = map_sample(p, lt.background_map, d);
             for i in 0..n_wl {
-                let l: f64 = (0..4).map(|j| c[j] * sp(lt.spectra, j * n_wl + i)).sum();
-                add(i, l);
+                add(i, expand(&c, lt.spectra, i));
             }
         }
         Some((oi, n)) => {
@@ -157,7 +176,7 @@ fn pixel(p: &Prepared, x: usize, y: usize) -> [f32; 3] {
             let ct = if transparent {
                 map_sample(p, lt.background_map, d)
             } else {
-                [0.0; 4]
+                Vec::new()
             };
             let (sun_d, sun_s) = if lt.has_sun != 0 {
                 let s = lt.sun.map(|v| v as f64);
@@ -181,17 +200,17 @@ fn pixel(p: &Prepared, x: usize, y: usize) -> [f32; 3] {
                 };
                 r[2] + (r[3] - r[2]) * t
             });
+            let sun_spd = lt.layout[1];
             for i in 0..n_wl {
-                let s = [0, 1, 2, 3].map(|j| sp(lt.spectra, j * n_wl + i));
-                let ld: f64 = (0..4).map(|j| cd[j] * s[j]).sum::<f64>() + sun_d * s[3];
-                let ls: f64 = (0..4).map(|j| cs[j] * s[j]).sum::<f64>() + sun_s * s[3];
+                let e = sp(sun_spd, i);
+                let ld = expand(&cd, lt.spectra, i) + sun_d * e;
+                let ls = expand(&cs, lt.spectra, i) + sun_s * e;
                 let (fr, ft) = match film {
                     Some(f) => film_rt(f, i, cos_v, scale),
                     None => (ks, 1.0),
                 };
                 let l = if transparent {
-                    let lt_: f64 = (0..4).map(|j| ct[j] * s[j]).sum();
-                    fr * ls + ft * lt_
+                    fr * ls + ft * expand(&ct, lt.spectra, i)
                 } else {
                     let rd = if m.flags & HAS_DIFFUSE != 0 {
                         sp(m.diffuse_offset, i)

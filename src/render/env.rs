@@ -7,7 +7,7 @@
 //! are bilinear, wrapping in longitude and clamped in latitude; `sample` here and `sample_map` in
 //! `gpu.wgsl` are the same function.
 
-use super::{Environment, Lighting, Sun};
+use super::{Environment, LightSpectra, Lighting, Sun};
 use crate::colorimetry::{Observer, RgbSpace};
 use crate::envmap::exrio::{self, AttrValue, EnvmapAttr};
 use crate::envmap::layout::{detect, EnvMap, Layout};
@@ -28,11 +28,13 @@ pub const DIFFUSE_ROWS: usize = 16;
 /// Rows of each specular map.
 pub const SPECULAR_ROWS: usize = 32;
 
-/// A lat-long map of four coefficients per texel.
+/// A lat-long map of `4 groups` coefficients per texel: texel (x, y) holds the groups
+/// `texels[(y w + x) groups + g]`, coefficients `4 g .. 4 g + 3`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CoeffMap {
     pub width: usize,
     pub height: usize,
+    pub groups: usize,
     pub texels: Vec<[f32; 4]>,
 }
 
@@ -42,27 +44,47 @@ impl CoeffMap {
         CoeffMap {
             width: 1,
             height: 1,
+            groups: 1,
             texels: vec![c],
         }
     }
 
-    /// A `2 rows x rows` map computed per texel direction.
+    /// A `2 rows x rows` map of one group computed per texel direction.
     pub fn from_fn(rows: usize, f: impl Fn([f64; 3]) -> [f32; 4] + Sync) -> CoeffMap {
+        CoeffMap::from_fn_groups(rows, 1, |d, out| out[0] = f(d))
+    }
+
+    /// A `2 rows x rows` map of `groups` groups computed per texel direction.
+    pub fn from_fn_groups(
+        rows: usize,
+        groups: usize,
+        f: impl Fn([f64; 3], &mut [[f32; 4]]) + Sync,
+    ) -> CoeffMap {
         let (w, h) = (2 * rows, rows);
-        let texels = (0..w * h)
-            .into_par_iter()
-            .map(|i| f(direction(w, h, i % w, i / w)))
-            .collect();
+        let mut texels = vec![[0f32; 4]; w * h * groups];
+        texels
+            .par_chunks_mut(groups)
+            .enumerate()
+            .for_each(|(i, out)| f(direction(w, h, i % w, i / w), out));
         CoeffMap {
             width: w,
             height: h,
+            groups,
             texels,
         }
     }
 
-    /// Bilinear lookup in direction `dir` (unit).
-    pub fn sample(&self, dir: [f64; 3]) -> [f64; 4] {
-        sample(&self.texels, self.width, self.height, dir)
+    /// Bilinear lookup in direction `dir` (unit): `4 groups` coefficients.
+    pub fn sample(&self, dir: [f64; 3]) -> Vec<f64> {
+        sample(&self.texels, self.width, self.height, self.groups, dir)
+    }
+
+    /// The coefficients of texel `i` (row-major).
+    pub fn texel(&self, i: usize) -> impl Iterator<Item = f32> + '_ {
+        self.texels[i * self.groups..(i + 1) * self.groups]
+            .iter()
+            .flatten()
+            .copied()
     }
 }
 
@@ -80,8 +102,8 @@ pub fn solid_angle(w: usize, h: usize, y: usize) -> f64 {
     2.0 * PI / w as f64 * (t0.cos() - t1.cos())
 }
 
-/// Bilinear lookup of a `w x h` lat-long stored row-major in `texels`.
-pub fn sample(texels: &[[f32; 4]], w: usize, h: usize, dir: [f64; 3]) -> [f64; 4] {
+/// The four texels around direction `dir` in a `w x h` lat-long and their bilinear weights.
+pub fn bilinear(w: usize, h: usize, dir: [f64; 3]) -> [(usize, f64); 4] {
     let u = 0.5 - dir[0].atan2(dir[2]) / (2.0 * PI);
     let v = dir[1].clamp(-1.0, 1.0).acos() / PI;
     let fx = u * w as f64 - 0.5;
@@ -90,18 +112,28 @@ pub fn sample(texels: &[[f32; 4]], w: usize, h: usize, dir: [f64; 3]) -> [f64; 4
     let tx = fx - x0f;
     let y0f = fy.floor();
     let ty = fy - y0f;
-    let wi = w as i64;
-    let x0 = (x0f as i64).rem_euclid(wi) as usize;
+    let x0 = (x0f as i64).rem_euclid(w as i64) as usize;
     let x1 = (x0 + 1) % w;
     let y0 = y0f as usize;
     let y1 = (y0 + 1).min(h - 1);
-    let t = |x: usize, y: usize| texels[y * w + x];
-    let (a, b, c, d) = (t(x0, y0), t(x1, y0), t(x0, y1), t(x1, y1));
-    let mut out = [0.0; 4];
-    for k in 0..4 {
-        let top = a[k] as f64 * (1.0 - tx) + b[k] as f64 * tx;
-        let bottom = c[k] as f64 * (1.0 - tx) + d[k] as f64 * tx;
-        out[k] = top * (1.0 - ty) + bottom * ty;
+    [
+        (y0 * w + x0, (1.0 - tx) * (1.0 - ty)),
+        (y0 * w + x1, tx * (1.0 - ty)),
+        (y1 * w + x0, (1.0 - tx) * ty),
+        (y1 * w + x1, tx * ty),
+    ]
+}
+
+/// Bilinear lookup of a `w x h` lat-long of `groups` groups per texel stored row-major in
+/// `texels`: `4 groups` coefficients.
+pub fn sample(texels: &[[f32; 4]], w: usize, h: usize, groups: usize, dir: [f64; 3]) -> Vec<f64> {
+    let mut out = vec![0.0; 4 * groups];
+    for (t, wt) in bilinear(w, h, dir) {
+        for (g, c) in texels[t * groups..(t + 1) * groups].iter().enumerate() {
+            for k in 0..4 {
+                out[4 * g + k] += wt * c[k] as f64;
+            }
+        }
     }
     out
 }
@@ -155,14 +187,21 @@ pub fn prefilter(env: &Environment, shininess: &[f64]) -> Filtered {
         .collect();
     // Cosine-weighted mean radiance = irradiance / pi (normalised by the discrete weights, so a
     // constant map stays exactly constant).
-    let diffuse = CoeffMap::from_fn(DIFFUSE_ROWS, |n| {
-        filtered(src, &dirs, n, |c| c.max(0.0) as f32 as f64)
+    let g = src.groups;
+    let diffuse = CoeffMap::from_fn_groups(DIFFUSE_ROWS, g, |n, out| {
+        filtered(src, &dirs, n, |c| c.max(0.0) as f32 as f64, out)
     });
     let specular = shininess
         .iter()
         .map(|&s| {
-            let m = CoeffMap::from_fn(SPECULAR_ROWS, |r| {
-                filtered(src, &dirs, r, |c| if c > 0.0 { c.powf(s) } else { 0.0 })
+            let m = CoeffMap::from_fn_groups(SPECULAR_ROWS, g, |r, out| {
+                filtered(
+                    src,
+                    &dirs,
+                    r,
+                    |c| if c > 0.0 { c.powf(s) } else { 0.0 },
+                    out,
+                )
             });
             (s, m)
         })
@@ -174,30 +213,35 @@ pub fn prefilter(env: &Environment, shininess: &[f64]) -> Filtered {
     }
 }
 
-/// `sum c_i w_i / sum w_i` with `w_i = lobe(d . w_i) * omega_i`; the source's own value where the
-/// lobe is too narrow for any texel.
+/// `sum c_i w_i / sum w_i` with `w_i = lobe(d . w_i) * omega_i`, into `out` (the source's
+/// groups); the source's own value where the lobe is too narrow for any texel.
 fn filtered(
     src: &CoeffMap,
     dirs: &[([f64; 3], f64)],
     d: [f64; 3],
     lobe: impl Fn(f64) -> f64,
-) -> [f32; 4] {
-    let mut acc = [0.0f64; 4];
+    out: &mut [[f32; 4]],
+) {
+    let g = src.groups;
+    let mut acc = vec![0.0f64; 4 * g];
     let mut wsum = 0.0;
-    for (t, (w, omega)) in src.texels.iter().zip(dirs) {
+    for (t, (w, omega)) in src.texels.chunks_exact(g).zip(dirs) {
         let c = d[0] * w[0] + d[1] * w[1] + d[2] * w[2];
         let wt = lobe(c) * omega;
         if wt > 0.0 {
             wsum += wt;
-            for k in 0..4 {
-                acc[k] += wt * t[k] as f64;
+            for (a, v) in acc.iter_mut().zip(t.iter().flatten()) {
+                *a += wt * *v as f64;
             }
         }
     }
-    if wsum > 0.0 && wsum.is_finite() {
-        acc.map(|v| (v / wsum) as f32)
+    let value = if wsum > 0.0 && wsum.is_finite() {
+        acc.iter().map(|v| v / wsum).collect()
     } else {
-        src.sample(d).map(|v| v as f32)
+        src.sample(d)
+    };
+    for (k, v) in value.iter().enumerate() {
+        out[k / 4][k % 4] = *v as f32;
     }
 }
 
@@ -205,35 +249,45 @@ fn filtered(
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct EnvReport {
     pub file: String,
-    /// `rgb`, `basis` or `spectral`.
+    /// `rgb`, `basis` (version 1: three ColorChecker coefficients and a sun), `basis-k` (the
+    /// K-spectrum form) or `spectral`.
     pub kind: &'static str,
     pub input_size: [usize; 2],
+    /// The light the map's spectra were made with: `--light` for an RGB map (converted here),
+    /// the header's for a file from `specmap convert`.
     pub light: String,
+    /// Whether `--light` changed the lighting (only an RGB map's).
+    pub light_used: bool,
     pub sun_spd: String,
     /// The sun taken out as a directional light (None: no sun found).
     pub sun_direction: Option<[f64; 3]>,
     pub sun_irradiance: Option<f64>,
-    /// Spectral input: the largest relative residual of the projection onto the basis.
-    pub projection_residual: Option<f64>,
+    /// How many spectra the map's coefficients expand with.
+    pub spectra: usize,
+    /// A spectral map: how well its own spectra hold it.
+    pub projection: Option<crate::envmap::own_basis::Projection>,
 }
 
-/// The sun SPD given to sun pixels by `specmap convert` (and here): CIE D65, as in the paper.
-const SUN_SPD: &str = "D65";
+/// The sun SPD given to sun pixels of an RGB map converted here: CIE D65, as in the paper.
+pub const SUN_SPD: &str = "D65";
 
 /// Loads an environment map file as a lighting: an RGB EXR/HDR (converted on the fly with
-/// `light` as the main light, exact mode, the sun found and given D65), a `basis` EXR from
-/// `specmap convert --format basis`, or a spectral EXR (projected onto the basis and the sun's
-/// SPD). The sun becomes a directional light and leaves the map.
+/// `light` as the main light, exact mode, the sun found and given D65), or a file from
+/// `specmap convert`, lit by the spectra it holds whatever `light` says
+/// ([`super::own`]: a basis EXR of either version, or a spectral EXR projected onto its own
+/// principal components). The sun becomes a directional light and leaves the map.
 pub fn load(path: &Path, light: &str) -> Result<(Lighting, EnvReport)> {
     let channels = exr_channels(path).unwrap_or_default();
     let has = |n: &str| channels.iter().any(|c| c == n);
-    if has("c_R") && has("c_G") && has("c_B") {
+    if has("k00") {
+        super::own::load_basis_k(path)
+    } else if has("c_R") && has("c_G") && has("c_B") {
         load_basis(path)
     } else if channels
         .iter()
         .any(|c| exrio::parse_spectral_channel_name(c).is_some())
     {
-        load_spectral(path, light)
+        super::own::load_spectral(path, super::own::Spectra::Own)
     } else {
         load_rgb(path, light)
     }
@@ -259,16 +313,24 @@ fn fit_upsampler(light: &str, basis: [&str; 3], space: RgbSpace) -> Result<(Upsa
     Ok((Upsampler::new(&f, &space), f.light))
 }
 
-fn lighting(light: &str, basis: [&str; 3], env: CoeffMap, sun: Option<Sun>) -> Result<Lighting> {
+/// The paper's lighting of a light and basis by name, its sun given [`SUN_SPD`].
+fn paper_lighting(
+    light: &str,
+    basis: [&str; 3],
+    env: CoeffMap,
+    sun: Option<Sun>,
+) -> Result<Lighting> {
     let l = crate::data::spectrum(light)?;
     let [a, b, c] = basis.map(crate::data::spectrum);
     let e = crate::data::spectrum(SUN_SPD)?;
     Ok(Lighting {
         label: l.label,
-        light: l.data,
-        basis_reflectance: [a?.data, b?.data, c?.data],
-        e_spd: e.data,
-        e_label: e.label,
+        spectra: LightSpectra::Paper {
+            light: l.data,
+            basis_reflectance: [a?.data, b?.data, c?.data],
+            e_spd: e.data,
+            e_label: e.label,
+        },
         environment: Environment::Map(Arc::new(env)),
         sun,
     })
@@ -341,6 +403,7 @@ fn to_coefficients(map: &EnvMap, f: impl Fn([f32; 3]) -> [f64; 3] + Sync) -> Coe
     CoeffMap {
         width: ll.image.width,
         height: ll.image.height,
+        groups: 1,
         texels,
     }
 }
@@ -391,12 +454,14 @@ fn load_rgb(path: &Path, light: &str) -> Result<(Lighting, EnvReport)> {
         kind: "rgb",
         input_size,
         light: light_label,
+        light_used: true,
         sun_spd: SUN_SPD.into(),
         sun_direction: sun.map(|s| s.direction),
         sun_irradiance: sun.map(|s| s.irradiance),
-        projection_residual: None,
+        spectra: 4,
+        projection: None,
     };
-    Ok((lighting(light, basis, coeffs, sun)?, report))
+    Ok((paper_lighting(light, basis, coeffs, sun)?, report))
 }
 
 fn text_attr(attrs: &[(String, AttrValue)], name: &str) -> Option<String> {
@@ -502,191 +567,69 @@ fn load_basis(path: &Path) -> Result<(Lighting, EnvReport)> {
     // Coefficients resample linearly (negative ones included: EnvMap's filter is linear).
     let coeffs = to_coefficients(&map, |p| [p[0] as f64, p[1] as f64, p[2] as f64]);
     let names = [&basis_names[0], &basis_names[1], &basis_names[2]].map(|s| s.trim());
-    let lit = lighting(&light, names, coeffs, sun).map_err(|e| {
+    // The spectra the file stores are the ones its pixels were made of: use them (the names
+    // are a fallback for files written before they were stored).
+    let floats = |name: &str| {
+        layer
+            .attributes
+            .other
+            .iter()
+            .find_map(|(n, v)| (*n == *name).then(|| exrio::attr_from_exr(v)).flatten())
+            .and_then(|v| match v {
+                AttrValue::F32Vec(x) => Some(x.iter().map(|&v| v as f64).collect::<Vec<_>>()),
+                _ => None,
+            })
+    };
+    let stored = (|| -> Option<(Vec<Tabulated>, Tabulated)> {
+        let wl = floats("specmap.wavelengths")?;
+        let tab = |v: Vec<f64>| Tabulated::new(wl.clone(), v).ok();
+        let b: Option<Vec<Tabulated>> = (0..3)
+            .map(|j| tab(floats(&format!("specmap.basis{j}"))?))
+            .collect();
+        let sun = floats("specmap.sunSPD").and_then(tab).or_else(|| {
+            let d65 = crate::data::spectrum(SUN_SPD).ok()?.data;
+            Some(d65)
+        })?;
+        Some((b?, sun))
+    })();
+    let unknown = |e: Error| {
         Error::invalid(format!(
             "{}: the map's light or basis ({light}; {}) is not a known spectrum: {e}",
             path.display(),
             basis_names.join(", ")
         ))
-    })?;
+    };
+    let (lit, sun_label) = match stored {
+        Some((spectra, sun_spd)) => {
+            let label = "the file's sunSPD".to_string();
+            let lit = Lighting {
+                label: light.clone(),
+                spectra: LightSpectra::Own {
+                    spectra,
+                    sun_spd,
+                    sun_label: label.clone(),
+                },
+                environment: Environment::Map(Arc::new(coeffs)),
+                sun,
+            };
+            (lit, label)
+        }
+        None => (
+            paper_lighting(&light, names, coeffs, sun).map_err(unknown)?,
+            SUN_SPD.to_string(),
+        ),
+    };
     let report = EnvReport {
         file: path.display().to_string(),
         kind: "basis",
         input_size: [w, h],
         light,
-        sun_spd: SUN_SPD.into(),
-        sun_direction: sun.map(|s| s.direction),
-        sun_irradiance: sun.map(|s| s.irradiance),
-        projection_residual: None,
-    };
-    Ok((lit, report))
-}
-
-/// Projects every pixel's spectrum onto the basis (as `convert` would have written it: the
-/// header's light and basis, or `light` and the paper's basis) and the sun's SPD by least squares.
-fn load_spectral(path: &Path, light: &str) -> Result<(Lighting, EnvReport)> {
-    let info = exrio::read_spectral_info(path)?;
-    let light = text_attr(&info.attributes, "specmap.light").unwrap_or_else(|| light.to_string());
-    let basis_names: Vec<String> = text_attr(&info.attributes, "specmap.basis")
-        .map(|b| b.split(',').map(|s| s.trim().to_string()).collect())
-        .filter(|v: &Vec<String>| v.len() == 3)
-        .unwrap_or_else(|| fit::PAPER_BASIS.map(String::from).to_vec());
-    let names = [&basis_names[0], &basis_names[1], &basis_names[2]].map(|s| s.as_str());
-    let wl = info.wavelengths_nm.clone();
-    // The four spectra on the file's wavelengths, scaled as convert scales them (Y = 1).
-    let step = Tabulated::new(wl.clone(), vec![0.0; wl.len()])?
-        .uniform_step_nm()
-        .unwrap_or(1.0);
-    let grid = WavelengthGrid::new(wl[0], wl[wl.len() - 1], step).map_err(|_| {
-        Error::invalid(format!(
-            "{}: the spectral channels are not evenly spaced; the renderer needs a uniform grid",
-            path.display()
-        ))
-    })?;
-    let probe = lighting(&light, names, CoeffMap::constant([0.0; 4]), None)?;
-    let q = crate::quadrature::Quadrature::uniform(grid, Rule::Riemann, Observer::Cie1931)?;
-    let spectra = super::prepare::lighting_spectra(&probe, &q)?;
-    // Normal equations of the 4-function least squares.
-    let n = wl.len();
-    let g = nalgebra::Matrix4::from_fn(|a, b| (0..n).map(|i| spectra[a][i] * spectra[b][i]).sum());
-    let ginv = g.try_inverse().ok_or_else(|| {
-        Error::invalid(format!(
-            "{}: the basis and the sun's SPD are linearly dependent on the file's {} \
-             wavelengths; cannot project",
-            path.display(),
-            n
-        ))
-    })?;
-    // Colour-preserving coefficients: the basis combination with the pixel spectrum's XYZ. A
-    // least-squares fit of the spectrum itself would change the colour of any spectrum outside
-    // the basis' span (the faithful method's daylight and smooth spectra are), so the fit is
-    // used only to recognise the sun's pixels.
-    let cmfs = crate::colorimetry::Cmfs::new(Observer::Cie1931, &grid)?;
-    let bar = [cmfs.x.values(), cmfs.y.values(), cmfs.z.values()];
-    let xyz_of = |f: &dyn Fn(usize) -> f64| -> nalgebra::Vector3<f64> {
-        nalgebra::Vector3::from_fn(|k, _| (0..n).map(|i| f(i) * bar[k][i]).sum::<f64>())
-    };
-    let basis_xyz = nalgebra::Matrix3::from_columns(&[
-        xyz_of(&|i| spectra[0][i]),
-        xyz_of(&|i| spectra[1][i]),
-        xyz_of(&|i| spectra[2][i]),
-    ]);
-    let to_coeffs = basis_xyz.try_inverse().ok_or_else(|| {
-        Error::invalid(format!(
-            "{}: the basis spectra have linearly dependent colours on the file's wavelengths",
-            path.display()
-        ))
-    })?;
-    let (w, h) = (info.width, info.height);
-    let mut c_img = RgbImage::new(w, h);
-    // The pixels' colours as linear sRGB, to find the sun as `convert` does.
-    let mut preview = RgbImage::new(w, h);
-    let to_rgb = RgbSpace::SRGB.from_xyz_matrix();
-    let y_norm: f64 = bar[1].iter().sum();
-    let mut luminance = vec![0.0; w * h];
-    let mut worst = 0.0f64;
-    let mut too_large: Option<(usize, usize, f64)> = None;
-    exrio::read_spectral_rows(path, |y, row| {
-        let per = row.len() / w;
-        for x in 0..w {
-            let px = &row[x * per..x * per + n];
-            // A pixel with a NaN or infinite band is black (as `convert` treats them); one
-            // beyond MAX_RADIANCE stops the load.
-            if !px.iter().all(|v| v.is_finite()) {
-                continue;
-            }
-            let peak = px.iter().fold(0f64, |m, &v| m.max((v as f64).abs()));
-            if peak > MAX_RADIANCE {
-                too_large.get_or_insert((x, y, peak));
-                continue;
-            }
-            // How far the spectrum is from the basis' span (reported, not used).
-            let b = nalgebra::Vector4::from_fn(|a, _| {
-                (0..n).map(|i| spectra[a][i] * px[i] as f64).sum::<f64>()
-            });
-            let c = ginv * b;
-            let norm: f64 = px.iter().map(|v| (*v as f64).powi(2)).sum::<f64>().sqrt();
-            let res: f64 = (0..n)
-                .map(|i| {
-                    let fit: f64 = (0..4).map(|a| c[a] * spectra[a][i]).sum();
-                    (fit - px[i] as f64).powi(2)
-                })
-                .sum::<f64>()
-                .sqrt();
-            if norm > 0.0 && res.is_finite() {
-                worst = worst.max(res / norm);
-            }
-            let i = y * w + x;
-            let xyz = xyz_of(&|i| px[i] as f64);
-            let k = to_coeffs * xyz;
-            c_img.pixels[i] = [k[0] as f32, k[1] as f32, k[2] as f32];
-            let rgb = to_rgb * (xyz / y_norm);
-            preview.pixels[i] = [rgb[0] as f32, rgb[1] as f32, rgb[2] as f32];
-            luminance[i] = xyz[1] / y_norm;
-        }
-    })?;
-    if let Some((x, y, v)) = too_large {
-        return Err(too_bright(path, x, y, v));
-    }
-    let layout = detect(
-        w,
-        h,
-        info.envmap.map(|a| match a {
-            EnvmapAttr::LatLong => Layout::LatLong,
-            EnvmapAttr::Cube => Layout::Cube,
-        }),
-    )
-    .map_err(|e| Error::invalid(format!("{}: {e}", path.display())))?;
-    let bad = |e: Error| Error::invalid(format!("{}: {e}", path.display()));
-    let mut preview = EnvMap::new(layout, preview).map_err(bad)?;
-    sanitize(path, &mut preview.image)?;
-    // The sun: its pixels leave the environment and become the directional light, with the
-    // mean of their own spectra as its SPD (a matched sun is not D65).
-    let mut s = vec![0.0; w * h];
-    let mut sun_spd = None;
-    if let Some(found) = find_sun(&preview, &RgbSpace::SRGB, &SunSettings::default()).sun() {
-        let mut is_sun = vec![false; w * h];
-        for &i in &found.pixels {
-            is_sun[i] = true;
-            s[i] = luminance[i].max(0.0);
-            c_img.pixels[i] = [0.0; 3];
-        }
-        let mut sum = vec![0.0f64; n];
-        exrio::read_spectral_rows(path, |y, row| {
-            let per = row.len() / w;
-            for x in (0..w).filter(|&x| is_sun[y * w + x]) {
-                for (acc, v) in sum.iter_mut().zip(&row[x * per..x * per + n]) {
-                    *acc += *v as f64;
-                }
-            }
-        })?;
-        let y: f64 = (0..n).map(|i| sum[i] * bar[1][i]).sum::<f64>() / y_norm;
-        if y > 0.0 {
-            let spd = Tabulated::new(wl.clone(), sum.iter().map(|v| v / y).collect())?;
-            sun_spd = Some(spd);
-        }
-    }
-    let map = EnvMap::new(layout, c_img).map_err(bad)?;
-    let sun = directional(&map, &s);
-    let coeffs = to_coefficients(&map, |p| [p[0] as f64, p[1] as f64, p[2] as f64]);
-    let mut lit = lighting(&light, names, coeffs, sun)?;
-    let sun_label = match sun_spd {
-        Some(spd) if sun.is_some() => {
-            lit.e_spd = spd;
-            lit.e_label = "the sun pixels' own spectrum".to_string();
-            lit.e_label.clone()
-        }
-        _ => SUN_SPD.to_string(),
-    };
-    let report = EnvReport {
-        file: path.display().to_string(),
-        kind: "spectral",
-        input_size: [w, h],
-        light,
+        light_used: false,
         sun_spd: sun_label,
         sun_direction: sun.map(|s| s.direction),
         sun_irradiance: sun.map(|s| s.irradiance),
-        projection_residual: Some(worst),
+        spectra: 3,
+        projection: None,
     };
     Ok((lit, report))
 }
@@ -701,6 +644,7 @@ mod tests {
         let m = CoeffMap {
             width: w,
             height: h,
+            groups: 1,
             texels: (0..w * h).map(|i| [i as f32, 0.0, 0.0, 1.0]).collect(),
         };
         for y in 0..h {

@@ -8,6 +8,10 @@ use std::sync::{Arc, Mutex};
 use std::time::Instant;
 use wgpu::util::DeviceExt;
 
+/// The most groups of four coefficients a texel may hold on the GPU (`MAX_GROUPS` in the shader):
+/// 32 spectra, [`crate::envmap::own_basis::MAX_K`].
+pub const MAX_GROUPS: usize = 8;
+
 /// The shader, next to the host code that drives it.
 pub const SHADER: &str = include_str!("gpu.wgsl");
 
@@ -180,6 +184,18 @@ impl Gpu {
                 self.limits.max_storage_buffer_binding_size
             )));
         }
+        if let Some(l) = p
+            .lightings
+            .iter()
+            .find(|l| l.layout[0] as usize > MAX_GROUPS)
+        {
+            return Err(Error::invalid(format!(
+                "a lighting of {} spectra: the GPU renderer expands at most {} (the CPU \
+                 renderer has no limit)",
+                4 * l.layout[0],
+                4 * MAX_GROUPS
+            )));
+        }
         let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let params = self
             .device
@@ -287,5 +303,21 @@ impl Gpu {
             .poll(wgpu::PollType::wait_indefinitely())
             .map(|_| ())
             .map_err(|e| Error::invalid(format!("waiting for the GPU: {e}")))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    /// The shader parses and validates without an adapter (a GPU-less machine still checks it).
+    #[test]
+    fn the_shader_is_valid_wgsl() {
+        let module = naga::front::wgsl::parse_str(super::SHADER)
+            .unwrap_or_else(|e| panic!("{}", e.emit_to_string(super::SHADER)));
+        naga::valid::Validator::new(
+            naga::valid::ValidationFlags::all(),
+            naga::valid::Capabilities::empty(),
+        )
+        .validate(&module)
+        .unwrap_or_else(|e| panic!("{}", e.emit_to_string(super::SHADER)));
     }
 }

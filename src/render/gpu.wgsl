@@ -12,7 +12,9 @@ struct Params {
     // sum w_y (at cmf_offset, n_wl each), so that XYZ = sum_i w_i I(lambda_i).
     cmf_offset: u32,
     wl_offset: u32,
-    pad: u32,
+    // HIDE_BACKGROUND: rays that miss are black.
+    flags: u32,
+    // Image centre x, y, world size of a pixel, tan(half the background's vertical fov).
     view: vec4<f32>,
     rgb0: vec4<f32>,
     rgb1: vec4<f32>,
@@ -45,6 +47,8 @@ struct Lighting {
     background_map: u32,
     has_sun: u32,
     sun: vec4<f32>,
+    // Groups of four coefficients per texel, offset of the sun's SPD.
+    shape: vec4<u32>,
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
@@ -64,12 +68,20 @@ const QUAD: u32 = 2u;
 const TRANSPARENT: u32 = 1u;
 const HAS_FILM: u32 = 2u;
 const HAS_DIFFUSE: u32 = 4u;
+const HIDE_BACKGROUND: u32 = 1u;
+// The most groups of four coefficients a texel holds (prepare.rs: MAX_GROUPS).
+const MAX_GROUPS: u32 = 8u;
 
 // ---- environment maps (env.rs: sample) -------------------------------------------------------
 
-fn sample_map(map: u32, dir: vec3<f32>) -> vec4<f32> {
+// The four texels around a direction and their bilinear weights.
+struct Taps {
+    idx: vec4<u32>,
+    wt: vec4<f32>,
+}
+
+fn taps(map: u32, dir: vec3<f32>) -> Taps {
     let m = maps[map];
-    let off = m.x;
     let w = m.y;
     let h = m.z;
     let u = 0.5 - atan2(dir.x, dir.z) / TWO_PI;
@@ -85,13 +97,19 @@ fn sample_map(map: u32, dir: vec3<f32>) -> vec4<f32> {
     let x1 = (x0 + 1u) % w;
     let y0 = u32(y0f);
     let y1 = min(y0 + 1u, h - 1u);
-    let a = texels[off + y0 * w + x0];
-    let b = texels[off + y0 * w + x1];
-    let c = texels[off + y1 * w + x0];
-    let d = texels[off + y1 * w + x1];
-    let top = a * (1.0 - tx) + b * tx;
-    let bottom = c * (1.0 - tx) + d * tx;
-    return top * (1.0 - ty) + bottom * ty;
+    var t: Taps;
+    t.idx = vec4<u32>(y0 * w + x0, y0 * w + x1, y1 * w + x0, y1 * w + x1);
+    t.wt = vec4<f32>((1.0 - tx) * (1.0 - ty), tx * (1.0 - ty), (1.0 - tx) * ty, tx * ty);
+    return t;
+}
+
+// Group g of the map's coefficients in the direction of `t`.
+fn sample_group(map: u32, t: Taps, g: u32) -> vec4<f32> {
+    let m = maps[map];
+    let off = m.x;
+    let groups = m.w;
+    return texels[off + t.idx.x * groups + g] * t.wt.x + texels[off + t.idx.y * groups + g] * t.wt.y
+        + texels[off + t.idx.z * groups + g] * t.wt.z + texels[off + t.idx.w * groups + g] * t.wt.w;
 }
 
 // ---- complex arithmetic ----------------------------------------------------------------------
@@ -259,9 +277,29 @@ fn light_spectrum(off: u32, j: u32, i: u32) -> f32 {
     return spectra[off + j * params.n_wl + i];
 }
 
-fn expand(c: vec4<f32>, off: u32, i: u32) -> f32 {
-    return c.x * light_spectrum(off, 0u, i) + c.y * light_spectrum(off, 1u, i)
-        + c.z * light_spectrum(off, 2u, i) + c.w * light_spectrum(off, 3u, i);
+// Coefficients sampled in one direction, all groups.
+struct Coeffs {
+    g: array<vec4<f32>, MAX_GROUPS>,
+}
+
+fn sample_all(map: u32, dir: vec3<f32>, groups: u32) -> Coeffs {
+    let t = taps(map, dir);
+    var c: Coeffs;
+    for (var g = 0u; g < groups; g = g + 1u) {
+        c.g[g] = sample_group(map, t, g);
+    }
+    return c;
+}
+
+fn expand(c: Coeffs, groups: u32, off: u32, i: u32) -> f32 {
+    var l = 0.0;
+    for (var g = 0u; g < groups; g = g + 1u) {
+        let j = 4u * g;
+        let s = vec4<f32>(light_spectrum(off, j, i), light_spectrum(off, j + 1u, i),
+            light_spectrum(off, j + 2u, i), light_spectrum(off, j + 3u, i));
+        l = l + dot(c.g[g], s);
+    }
+    return l;
 }
 
 @compute @workgroup_size(8, 8, 1)
@@ -274,7 +312,11 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let nw = params.n_wl;
     let px = params.view.x + (f32(x) + 0.5 - 0.5 * f32(params.width)) * params.view.z;
     let py = params.view.y - (f32(y) + 0.5 - 0.5 * f32(params.height)) * params.view.z;
-    let d = vec3<f32>(0.0, 0.0, -1.0);
+    // The background's direction (cpu.rs: background_direction).
+    let t = params.view.w;
+    let bu = (f32(x) + 0.5 - 0.5 * f32(params.width)) / (0.5 * f32(params.height)) * t;
+    let bv = -(f32(y) + 0.5 - 0.5 * f32(params.height)) / (0.5 * f32(params.height)) * t;
+    let d = normalize(vec3<f32>(bu, bv, -1.0));
 
     // Nearest hit (cpu.rs: hit).
     var best = -1;
@@ -320,15 +362,16 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
 
     var xyz = vec3<f32>(0.0, 0.0, 0.0);
-    if (best < 0) {
+    if (best < 0 && (params.flags & HIDE_BACKGROUND) == 0u) {
         let lt = lightings[params.background];
-        let c = sample_map(lt.background_map, d);
+        let groups = lt.shape.x;
+        let c = sample_all(lt.background_map, d, groups);
         for (var i = 0u; i < nw; i = i + 1u) {
-            let l = expand(c, lt.spectra, i);
+            let l = expand(c, groups, lt.spectra, i);
             xyz = xyz + l * vec3<f32>(spectra[params.cmf_offset + i],
                 spectra[params.cmf_offset + nw + i], spectra[params.cmf_offset + 2u * nw + i]);
         }
-    } else {
+    } else if (best >= 0) {
         n = normalize(n);
         let o = objects[u32(best)];
         let mat = materials[o.material];
@@ -341,11 +384,13 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         let transparent = (mat.flags & TRANSPARENT) != 0u;
         let has_film = (mat.flags & HAS_FILM) != 0u;
         let has_diffuse = (mat.flags & HAS_DIFFUSE) != 0u;
-        let cd = sample_map(lt.diffuse_map, n);
-        let cs = sample_map(o.spec_map, rv);
-        var ct = vec4<f32>(0.0, 0.0, 0.0, 0.0);
+        let groups = lt.shape.x;
+        let sun_spd = lt.shape.y;
+        let cd = sample_all(lt.diffuse_map, n, groups);
+        let cs = sample_all(o.spec_map, rv, groups);
+        var ct: Coeffs;
         if (transparent) {
-            ct = sample_map(lt.background_map, d);
+            ct = sample_all(lt.background_map, d, groups);
         }
         var sun_d = 0.0;
         var sun_s = 0.0;
@@ -363,8 +408,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             scale = o.ramp.z + (o.ramp.w - o.ramp.z) * t;
         }
         for (var i = 0u; i < nw; i = i + 1u) {
-            let ld = expand(cd, lt.spectra, i) + sun_d * light_spectrum(lt.spectra, 3u, i);
-            let ls = expand(cs, lt.spectra, i) + sun_s * light_spectrum(lt.spectra, 3u, i);
+            let e = spectra[sun_spd + i];
+            let ld = expand(cd, groups, lt.spectra, i) + sun_d * e;
+            let ls = expand(cs, groups, lt.spectra, i) + sun_s * e;
             var fr = ks;
             var ft = 1.0;
             if (has_film) {
@@ -374,7 +420,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             }
             var l = 0.0;
             if (transparent) {
-                l = fr * ls + ft * expand(ct, lt.spectra, i);
+                l = fr * ls + ft * expand(ct, groups, lt.spectra, i);
             } else {
                 var rd = 0.0;
                 if (has_diffuse) {

@@ -7,10 +7,13 @@
 //! cylinder or quad; `N` is the normal, `V = +Z` the direction to the camera, `R_v` the mirror
 //! direction of the view ray. The light is an environment plus an optional sun:
 //!
-//! - the environment is linear in four coefficients per direction (GUIDE.md):
-//!   `L(w, lambda) = sum_j c_j(w) B_j(lambda) + c_3(w) E(lambda)`, `B_j` the fitted basis spectra
-//!   of the main light, `E` the sun's (or, for a uniform light, the main light's) SPD, all scaled
-//!   to luminance Y = 1 on the render's wavelengths. Lighting integrals are taken in coefficient space on
+//! - the environment is linear in K coefficients per direction: `L(w, lambda) = sum_j c_j(w)
+//!   S_j(lambda)`. For an RGB map or a uniform light (GUIDE.md) K = 4: `S_0..2 = B_j` the fitted
+//!   basis spectra of the main light and `S_3 = E` the sun's (or, for a uniform light, the main
+//!   light's) SPD, all scaled to luminance Y = 1 on the render's wavelengths. For a spectral or
+//!   basis map the `S_j` are the map's own spectra ([`env::own`]: the K spectra a basis file
+//!   stores, or a spectral file's principal components), so the render does not depend on
+//!   `--light`. Lighting integrals are taken in coefficient space on
 //!   the CPU ([`env`]): a diffuse irradiance map `D(N) = 1/pi int L max(N.w, 0) dw` and, per
 //!   shininess `n`, a specular map `P_n(R) = int L (R.w)^n dw / int (R.w)^n dw`, both lat-long;
 //!   the renderers expand the sampled coefficients with the spectra per wavelength;
@@ -37,6 +40,7 @@ pub mod cpu;
 pub mod env;
 pub mod gpu;
 pub mod image;
+pub mod own;
 pub mod prepare;
 pub mod presets;
 pub mod stimuli;
@@ -150,7 +154,8 @@ pub enum Environment {
         ground: f64,
         blend_deg: f64,
     },
-    /// A map in coefficient space (c_R, c_G, c_B on the basis, s on E), from a file.
+    /// A map in coefficient space: per texel one coefficient per spectrum of the lighting
+    /// ([`LightSpectra`]: c_R, c_G, c_B on the basis and s on E, or the map's own K), from a file.
     Map(Arc<env::CoeffMap>),
 }
 
@@ -162,22 +167,38 @@ pub struct Sun {
     pub irradiance: f64,
 }
 
+/// The spectra a lighting's coefficients expand with.
+#[derive(Debug, Clone)]
+pub enum LightSpectra {
+    /// The paper's: `B_j = basis_reflectance_j * light` and `E`, the fourth coefficient's SPD
+    /// (the sun's for a map, the main light's for a uniform or sky-and-ground environment). At
+    /// the render's wavelengths the light is scaled to luminance Y = 1 (so are the `B_j`, by the
+    /// light's factor) and `E` to Y = 1 (as [`crate::envmap::engine::Engine`] does).
+    Paper {
+        /// The main light.
+        light: Tabulated,
+        /// The basis reflectances (the paper's ColorChecker red, green, blue).
+        basis_reflectance: [Tabulated; 3],
+        e_spd: Tabulated,
+        /// Label of `e_spd`.
+        e_label: String,
+    },
+    /// A map's own spectra, in the map's radiance units (coefficient `j` multiplies
+    /// `spectra[j]`, unnormalised), and the sun's SPD at luminance Y = 1 on the file's
+    /// wavelengths (the sun's irradiance is in its units).
+    Own {
+        spectra: Vec<Tabulated>,
+        sun_spd: Tabulated,
+        sun_label: String,
+    },
+}
+
 /// The light of (part of) a scene: the spectra its coefficients expand with, the environment and
 /// the sun.
 #[derive(Debug, Clone)]
 pub struct Lighting {
     pub label: String,
-    /// The main light (the basis is `B_j = basis_reflectance_j * light`).
-    pub light: Tabulated,
-    /// The basis reflectances (the paper's ColorChecker red, green, blue).
-    pub basis_reflectance: [Tabulated; 3],
-    /// `E`, the SPD of the fourth coefficient: the sun's for a map, the main light's for a uniform
-    /// or sky-and-ground environment. At the render's wavelengths `B_j = MCC_j * light * k` with `k`
-    /// making the light Y = 1, and `E` is scaled to Y = 1 (as
-    /// [`crate::envmap::engine::Engine`] does).
-    pub e_spd: Tabulated,
-    /// Label of `e_spd`.
-    pub e_label: String,
+    pub spectra: LightSpectra,
     pub environment: Environment,
     pub sun: Option<Sun>,
 }
@@ -190,13 +211,31 @@ impl Lighting {
         let basis = basis_reflectances()?;
         Ok(Lighting {
             label: l.label.clone(),
-            light: l.data.clone(),
-            basis_reflectance: basis,
-            e_spd: l.data,
-            e_label: l.label,
+            spectra: LightSpectra::Paper {
+                light: l.data.clone(),
+                basis_reflectance: basis,
+                e_spd: l.data,
+                e_label: l.label,
+            },
             environment: Environment::Uniform { radiance },
             sun,
         })
+    }
+
+    /// How many coefficients a texel of this lighting's maps holds.
+    pub fn coefficients(&self) -> usize {
+        match &self.spectra {
+            LightSpectra::Paper { .. } => 4,
+            LightSpectra::Own { spectra, .. } => spectra.len(),
+        }
+    }
+
+    /// The label of the SPD the sun (and a uniform environment) radiates.
+    pub fn sun_label(&self) -> &str {
+        match &self.spectra {
+            LightSpectra::Paper { e_label, .. } => e_label,
+            LightSpectra::Own { sun_label, .. } => sun_label,
+        }
     }
 }
 
@@ -217,6 +256,26 @@ pub struct Scene {
     pub objects: Vec<Object>,
     /// The lighting whose environment is seen where rays miss.
     pub background: usize,
+    /// How the background is seen.
+    pub backdrop: Backdrop,
+}
+
+/// What a ray that misses every object sees.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Backdrop {
+    /// The background lighting's environment through a pinhole at the image centre looking
+    /// down −Z with this vertical field of view (the objects stay orthographic): a map shows
+    /// as a photograph would.
+    Environment { fov_deg: f64 },
+    /// The environment straight down −Z: one colour.
+    Flat,
+    /// Black.
+    Hidden,
+}
+
+impl Backdrop {
+    /// The previews' default: the environment through a 60 degree field of view.
+    pub const DEFAULT: Backdrop = Backdrop::Environment { fov_deg: 60.0 };
 }
 
 /// How spectra become colours: grid, integration rule, observer, output RGB space.

@@ -4,7 +4,7 @@
 //! arrays, so both backends see the same numbers.
 
 use super::env::{self, CoeffMap};
-use super::{Lighting, Scene, Shape, Spectral, MAX_LAYERS};
+use super::{Backdrop, LightSpectra, Lighting, Scene, Shape, Spectral, MAX_LAYERS};
 use crate::colorimetry::RgbSpace;
 use crate::error::{Error, Result};
 use crate::quadrature::Quadrature;
@@ -23,6 +23,9 @@ pub const TRANSPARENT: u32 = 1;
 pub const HAS_FILM: u32 = 2;
 pub const HAS_DIFFUSE: u32 = 4;
 
+/// `Params::flags`: rays that miss every object are black, not the environment.
+pub const HIDE_BACKGROUND: u32 = 1;
+
 /// Frame constants (a uniform buffer).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
@@ -35,8 +38,10 @@ pub struct Params {
     /// Offset in `spectra` of the quadrature's x, y, z weights over `sum w_y` (n_wl each).
     pub cmf_offset: u32,
     pub wl_offset: u32,
-    pub _pad: u32,
-    /// World x, y of the image centre, world size of a pixel, unused.
+    /// [`HIDE_BACKGROUND`].
+    pub flags: u32,
+    /// World x, y of the image centre, world size of a pixel, and the tangent of half the
+    /// vertical field of view the background is seen with (0: straight down −Z).
     pub view: [f32; 4],
     /// XYZ (Y = 1) -> linear RGB, rows (w unused).
     pub rgb: [[f32; 4]; 3],
@@ -79,13 +84,15 @@ pub struct GpuMaterial {
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
 pub struct GpuLighting {
-    /// Offset of B_0; B_1, B_2 and E follow, n_wl apart.
+    /// Offset of the first spectrum; the other `4 groups - 1` follow, n_wl apart.
     pub spectra: u32,
     pub diffuse_map: u32,
     pub background_map: u32,
     pub has_sun: u32,
     /// Direction to the sun xyz, irradiance.
     pub sun: [f32; 4],
+    /// Groups of four coefficients per texel, offset of the sun's SPD, unused.
+    pub layout: [u32; 4],
 }
 
 /// The CPU's own copy of a film: the thin-film module's stack and its per-wavelength films.
@@ -120,37 +127,60 @@ fn luminance(s: &[f64], q: &Quadrature) -> f64 {
     q.integrate(s)[1] / q.sum()[1]
 }
 
-/// The four spectra a lighting's coefficients expand with, at the quadrature's nodes:
-/// `B_j = MCC_j * S * k` with `Y(S k) = 1`, and `E / Y(E)`.
-pub fn lighting_spectra(l: &Lighting, q: &Quadrature) -> Result<[Vec<f64>; 4]> {
+/// The spectra a lighting's coefficients expand with, at the quadrature's nodes, padded with
+/// zeros to a whole number of groups of four, and the sun's SPD. The paper's:
+/// `B_j = MCC_j * S * k` with `Y(S k) = 1`, and `E / Y(E)` (also the sun's); a map's own: as
+/// tabulated (radiance units), the sun's at the file's Y = 1.
+pub fn lighting_spectra(l: &Lighting, q: &Quadrature) -> Result<(Vec<Vec<f64>>, Vec<f64>)> {
     let nodes = q.nodes_nm();
     let on = || -> String { q.describe() };
-    let s = sample(&l.light, nodes, Interpolation::LIGHT);
-    let ys = luminance(&s, q);
-    if !(ys.is_finite() && ys > 0.0) {
-        return Err(Error::invalid(format!(
-            "the light {} has no visible energy on the wavelengths {}",
-            l.label,
-            on()
-        )));
+    match &l.spectra {
+        LightSpectra::Paper {
+            light,
+            basis_reflectance,
+            e_spd,
+            e_label,
+        } => {
+            let s = sample(light, nodes, Interpolation::LIGHT);
+            let ys = luminance(&s, q);
+            if !(ys.is_finite() && ys > 0.0) {
+                return Err(Error::invalid(format!(
+                    "the light {} has no visible energy on the wavelengths {}",
+                    l.label,
+                    on()
+                )));
+            }
+            let b = |j: usize| -> Vec<f64> {
+                sample(&basis_reflectance[j], nodes, Interpolation::SMOOTH)
+                    .iter()
+                    .zip(&s)
+                    .map(|(r, s)| r * s / ys)
+                    .collect()
+            };
+            let e = sample(e_spd, nodes, Interpolation::LIGHT);
+            let ye = luminance(&e, q);
+            if !(ye.is_finite() && ye > 0.0) {
+                return Err(Error::invalid(format!(
+                    "the SPD {e_label} has no visible energy on the wavelengths {}",
+                    on()
+                )));
+            }
+            let e: Vec<f64> = e.iter().map(|v| v / ye).collect();
+            Ok((vec![b(0), b(1), b(2), e.clone()], e))
+        }
+        LightSpectra::Own {
+            spectra, sun_spd, ..
+        } => {
+            let mut out: Vec<Vec<f64>> = spectra
+                .iter()
+                .map(|s| sample(s, nodes, Interpolation::LIGHT))
+                .collect();
+            while out.is_empty() || !out.len().is_multiple_of(4) {
+                out.push(vec![0.0; nodes.len()]);
+            }
+            Ok((out, sample(sun_spd, nodes, Interpolation::LIGHT)))
+        }
     }
-    let b = |j: usize| -> Vec<f64> {
-        sample(&l.basis_reflectance[j], nodes, Interpolation::SMOOTH)
-            .iter()
-            .zip(&s)
-            .map(|(r, s)| r * s / ys)
-            .collect()
-    };
-    let e = sample(&l.e_spd, nodes, Interpolation::LIGHT);
-    let ye = luminance(&e, q);
-    if !(ye.is_finite() && ye > 0.0) {
-        return Err(Error::invalid(format!(
-            "the SPD {} has no visible energy on the wavelengths {}",
-            l.e_label,
-            on()
-        )));
-    }
-    Ok([b(0), b(1), b(2), e.iter().map(|v| v / ye).collect()])
 }
 
 fn offset(v: &[f32]) -> Result<u32> {
@@ -159,7 +189,12 @@ fn offset(v: &[f32]) -> Result<u32> {
 
 fn push_map(maps: &mut Vec<[u32; 4]>, texels: &mut Vec<[f32; 4]>, m: &CoeffMap) -> u32 {
     let i = maps.len() as u32;
-    maps.push([texels.len() as u32, m.width as u32, m.height as u32, 0]);
+    maps.push([
+        texels.len() as u32,
+        m.width as u32,
+        m.height as u32,
+        m.groups as u32,
+    ]);
     texels.extend_from_slice(&m.texels);
     i
 }
@@ -198,10 +233,25 @@ impl Prepared {
         let mut lightings = Vec::new();
         let mut spec_index: Vec<Vec<(f64, u32)>> = Vec::new();
         for (li, l) in scene.lightings.iter().enumerate() {
-            let sp = lighting_spectra(l, q)?;
+            let (sp, sun_spd) = lighting_spectra(l, q)?;
+            let groups = sp.len() / 4;
             let off = offset(&spectra)?;
             for s in &sp {
                 spectra.extend(s.iter().map(|&v| v as f32));
+            }
+            let sun_offset = offset(&spectra)?;
+            spectra.extend(sun_spd.iter().map(|&v| v as f32));
+            let map_groups = match &l.environment {
+                super::Environment::Map(m) => m.groups,
+                _ => 1,
+            };
+            if map_groups != groups {
+                return Err(Error::invalid(format!(
+                    "lighting {}: its map holds {} coefficients a texel for {} spectra",
+                    l.label,
+                    4 * map_groups,
+                    sp.len()
+                )));
             }
             let mut shininess: Vec<f64> = Vec::new();
             for o in scene.objects.iter().filter(|o| o.lighting == li) {
@@ -238,6 +288,7 @@ impl Prepared {
                 background_map,
                 has_sun,
                 sun,
+                layout: [groups as u32, sun_offset, 0, 0],
             });
         }
         if texels.len() > u32::MAX as usize {
@@ -385,12 +436,18 @@ impl Prepared {
             background: scene.background as u32,
             cmf_offset,
             wl_offset,
-            _pad: 0,
+            flags: match scene.backdrop {
+                Backdrop::Hidden => HIDE_BACKGROUND,
+                _ => 0,
+            },
             view: [
                 scene.view.center[0] as f32,
                 scene.view.center[1] as f32,
                 pixel as f32,
-                0.0,
+                match scene.backdrop {
+                    Backdrop::Environment { fov_deg } => (0.5 * fov_deg.to_radians()).tan() as f32,
+                    _ => 0.0,
+                },
             ],
             rgb: [row(0), row(1), row(2)],
         };

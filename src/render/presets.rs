@@ -16,16 +16,20 @@ pub enum Preset {
     TransparentBall,
     /// Fig. 8: chrome oxide on plastic, thickness rising from 100 nm (left) to 400 nm (right).
     Cylinders,
-    /// Fig. 9: ColorChecker patches and plastic spheres under D65, A and low-pressure sodium.
+    /// Fig. 9: ColorChecker patches and plastic spheres under D65, A and low-pressure sodium
+    /// (one row under the map with an environment).
     Chart,
+    /// The 24 ColorChecker reflectances as Lambertian spheres, 6 x 4 (the Mitsuba 3 check).
+    CheckerSpheres,
 }
 
 impl Preset {
-    pub const ALL: [Preset; 4] = [
+    pub const ALL: [Preset; 5] = [
         Preset::Ball,
         Preset::TransparentBall,
         Preset::Cylinders,
         Preset::Chart,
+        Preset::CheckerSpheres,
     ];
 
     pub fn name(self) -> &'static str {
@@ -34,6 +38,7 @@ impl Preset {
             Preset::TransparentBall => "transparent-ball",
             Preset::Cylinders => "cylinders",
             Preset::Chart => "chart",
+            Preset::CheckerSpheres => "checker-spheres",
         }
     }
 
@@ -43,15 +48,16 @@ impl Preset {
             Preset::Ball | Preset::Cylinders => (512, 512),
             Preset::TransparentBall => (768, 384),
             Preset::Chart => (768, 512),
+            Preset::CheckerSpheres => (384, 256),
         }
     }
 
     /// The lights of the chart's rows, top to bottom.
     pub const CHART_LIGHTS: [&'static str; 3] = ["D65", "A", "lps"];
 
-    /// Builds the scene. `lighting` replaces the preset's light (ignored by `chart`, which
-    /// compares its three lights); None: the uniform light `light` (D65 by default) with a
-    /// key light of the same SPD.
+    /// Builds the scene. `lighting` replaces the preset's light (`chart`: its three rows become
+    /// one row under it); None: the uniform light `light` (D65 by default) with a key light of
+    /// the same SPD (`chart` compares its three lights).
     pub fn scene(
         self,
         width: usize,
@@ -193,7 +199,11 @@ impl Preset {
                     },
                 )
             }
-            Preset::Chart => chart()?,
+            Preset::Chart => match &lighting {
+                None => chart()?,
+                Some(l) => chart_under(l.clone(), width, height)?,
+            },
+            Preset::CheckerSpheres => checker_spheres(main_light(1.0)?)?,
         };
         Ok(Scene {
             name: self.name().into(),
@@ -203,6 +213,7 @@ impl Preset {
             lightings,
             objects,
             background: 0,
+            backdrop: super::Backdrop::DEFAULT,
         })
     }
 }
@@ -219,6 +230,85 @@ fn key_light() -> Sun {
         direction: key_light_direction(),
         irradiance: 1.5,
     }
+}
+
+/// The centre of ColorChecker sphere `k` (0..24, the table's column order) of the
+/// `checker-spheres` preset: 6 columns, 4 rows, one world unit apart, from the top left.
+pub fn checker_sphere_center(k: usize) -> [f64; 3] {
+    let (col, row) = ((k % 6) as f64, (k / 6) as f64);
+    [col - 2.5, 1.5 - row, 0.0]
+}
+
+/// The radius of the `checker-spheres` preset's spheres.
+pub const CHECKER_SPHERE_RADIUS: f64 = 0.4;
+
+/// The 24 ColorChecker reflectances as Lambertian spheres (k_d = 1, no specular) under one
+/// lighting, framed 4 world units high: what the Mitsuba 3 interop test renders sphere by
+/// sphere.
+fn checker_spheres(lighting: Lighting) -> Result<(Vec<Object>, Vec<Lighting>, View)> {
+    let cc = crate::data::Table::builtin("colorchecker")?;
+    let objects = cc
+        .columns()
+        .iter()
+        .enumerate()
+        .map(|(k, name)| -> Result<Object> {
+            Ok(Object {
+                shape: Shape::Sphere {
+                    center: checker_sphere_center(k),
+                    radius: CHECKER_SPHERE_RADIUS,
+                },
+                surface: Surface {
+                    label: format!("colorchecker:{name}"),
+                    diffuse: Some(cc.column(name)?),
+                    kd: 1.0,
+                    ks: 0.0,
+                    shininess: 1.0,
+                    film: None,
+                    transparent: false,
+                },
+                lighting: 0,
+                ramp: None,
+                main: true,
+            })
+        })
+        .collect::<Result<_>>()?;
+    Ok((
+        objects,
+        vec![lighting],
+        View {
+            center: [0.0, 0.0],
+            half_height: 2.0,
+        },
+    ))
+}
+
+/// One row of Fig. 9 (the patches, the plastic spheres) under `lighting`, framed to the width.
+fn chart_under(
+    lighting: Lighting,
+    width: usize,
+    height: usize,
+) -> Result<(Vec<Object>, Vec<Lighting>, View)> {
+    let (all, _, _) = chart()?;
+    let objects = all
+        .into_iter()
+        .filter(|o| o.lighting == 0)
+        .map(|mut o| {
+            if let Shape::Quad { center, .. } | Shape::Sphere { center, .. } = &mut o.shape {
+                center[1] -= 1.0;
+            }
+            o
+        })
+        .collect();
+    // The row spans x from -1.9 to 1.9.
+    let half_height = (2.0 * height as f64 / width.max(1) as f64).max(0.55);
+    Ok((
+        objects,
+        vec![lighting],
+        View {
+            center: [0.0, 0.0],
+            half_height,
+        },
+    ))
 }
 
 /// Fig. 9: per row (D65, A, LPS), the 24 ColorChecker patches and three plastic spheres: red,

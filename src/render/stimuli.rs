@@ -21,7 +21,7 @@
 //! has every azimuth, a cylinder along X only normals in the YZ plane, a quad only +Z): the sun's
 //! `max(N.l, 0)` diffusely and its Phong lobe `(R_v.l)^n` in reflection.
 
-use super::{Environment, Lighting, Scene, Shape};
+use super::{Environment, LightSpectra, Lighting, Scene, Shape};
 use crate::error::Result;
 use crate::thinfilm::{Incidence, Layer, Stack};
 use crate::tradeoff::{Factor, Stimulus, Surface as Seen};
@@ -57,21 +57,123 @@ struct Radiated {
 
 fn radiated(l: &Lighting) -> Vec<Radiated> {
     let mut out = Vec::new();
-    if matches!(l.environment, Environment::Map(_)) {
-        for (j, b) in l.basis_reflectance.iter().enumerate() {
+    match &l.spectra {
+        LightSpectra::Paper {
+            light,
+            basis_reflectance,
+            e_spd,
+            e_label,
+        } => {
+            if matches!(l.environment, Environment::Map(_)) {
+                for (j, b) in basis_reflectance.iter().enumerate() {
+                    out.push(Radiated {
+                        label: format!("basis {} of {}", j + 1, l.label),
+                        light: light.clone(),
+                        tint: Some(b.clone()),
+                    });
+                }
+            }
             out.push(Radiated {
-                label: format!("basis {} of {}", j + 1, l.label),
-                light: l.light.clone(),
-                tint: Some(b.clone()),
+                label: e_label.clone(),
+                light: e_spd.clone(),
+                tint: None,
             });
         }
+        LightSpectra::Own {
+            spectra,
+            sun_spd,
+            sun_label,
+        } => {
+            // A map's own spectra may go negative (principal components): what it radiates is
+            // the spectra of its brightest and most different texels.
+            if let Environment::Map(m) = &l.environment {
+                for (k, s) in representative_spectra(m, spectra).into_iter().enumerate() {
+                    out.push(Radiated {
+                        label: format!("texel spectrum {} of {}", k + 1, l.label),
+                        light: s,
+                        tint: None,
+                    });
+                }
+            }
+            if l.sun.is_some() {
+                out.push(Radiated {
+                    label: sun_label.clone(),
+                    light: sun_spd.clone(),
+                    tint: None,
+                });
+            }
+        }
     }
-    out.push(Radiated {
-        label: l.e_label.clone(),
-        light: l.e_spd.clone(),
-        tint: None,
-    });
     out
+}
+
+/// How many texel spectra stand for a map of its own spectra.
+const REPRESENTATIVES: usize = 12;
+
+/// The spectra of a few texels of `map` that differ most (farthest-point sampling in the
+/// coefficients normalised to unit length, from the brightest texel).
+fn representative_spectra(
+    map: &super::env::CoeffMap,
+    spectra: &[crate::spectrum::Tabulated],
+) -> Vec<crate::spectrum::Tabulated> {
+    let k = spectra.len();
+    let texels: Vec<Vec<f64>> = (0..map.width * map.height)
+        .map(|i| map.texel(i).take(k).map(|v| v as f64).collect())
+        .collect();
+    let norm = |c: &[f64]| c.iter().map(|v| v * v).sum::<f64>().sqrt();
+    let unit: Vec<Vec<f64>> = texels
+        .iter()
+        .map(|c| {
+            let n = norm(c);
+            c.iter()
+                .map(|v| if n > 0.0 { v / n } else { 0.0 })
+                .collect()
+        })
+        .collect();
+    let Some(first) =
+        (0..texels.len()).max_by(|&a, &b| norm(&texels[a]).total_cmp(&norm(&texels[b])))
+    else {
+        return Vec::new();
+    };
+    let dist = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>();
+    let mut chosen = vec![first];
+    let mut nearest: Vec<f64> = unit.iter().map(|u| dist(u, &unit[first])).collect();
+    while chosen.len() < REPRESENTATIVES.min(texels.len()) {
+        let (next, d) = nearest
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1.total_cmp(b.1))
+            .map(|(i, d)| (i, *d))
+            .unwrap_or((0, 0.0));
+        if d <= 1e-12 {
+            break;
+        }
+        chosen.push(next);
+        for (i, u) in unit.iter().enumerate() {
+            nearest[i] = nearest[i].min(dist(u, &unit[next]));
+        }
+    }
+    let wl = spectra
+        .first()
+        .map(|s| s.wavelengths_nm().to_vec())
+        .unwrap_or_default();
+    chosen
+        .into_iter()
+        .filter_map(|t| {
+            let c = &texels[t];
+            let v: Vec<f64> = (0..wl.len())
+                .map(|i| {
+                    (0..k)
+                        .map(|j| c[j] * spectra[j].values()[i])
+                        .sum::<f64>()
+                        .max(0.0)
+                })
+                .collect();
+            (norm(&v) > 0.0)
+                .then(|| crate::spectrum::Tabulated::new(wl.clone(), v).ok())
+                .flatten()
+        })
+        .collect()
 }
 
 /// The brightest the environment gets, in units of its spectra's whites.
@@ -81,8 +183,8 @@ fn environment_peak(env: &Environment) -> f64 {
         Environment::SkyGround { sky, ground, .. } => sky.abs().max(ground.abs()),
         Environment::Map(m) => m
             .texels
-            .iter()
-            .map(|t| t.iter().map(|v| (*v as f64).abs()).sum::<f64>())
+            .chunks(m.groups)
+            .map(|t| t.iter().flatten().map(|v| (*v as f64).abs()).sum::<f64>())
             .fold(0.0, f64::max),
     }
 }

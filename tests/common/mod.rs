@@ -53,3 +53,25 @@ pub fn specmap_json(args: &[&str]) -> serde_json::Value {
     );
     serde_json::from_slice(&out.stdout).unwrap_or_else(|e| panic!("{args:?}: {e}"))
 }
+
+/// The GPU renderer, once per test binary; None without an adapter, unless
+/// `SPECMAP_REQUIRE_GPU=1` (set by tools/test.sh, which installs Mesa's lavapipe), where a
+/// missing adapter fails.
+pub fn gpu() -> Option<&'static specmap::render::gpu::Gpu> {
+    use specmap::render::gpu::Gpu;
+    static GPU: std::sync::OnceLock<Option<Gpu>> = std::sync::OnceLock::new();
+    GPU.get_or_init(|| match Gpu::new() {
+        Ok(g) => {
+            eprintln!("GPU tests on {:?}", g.adapter());
+            Some(g)
+        }
+        Err(e) => {
+            if std::env::var("SPECMAP_REQUIRE_GPU").as_deref() == Ok("1") {
+                panic!("SPECMAP_REQUIRE_GPU=1 but {e}");
+            }
+            eprintln!("notice: skipping GPU checks: {e}");
+            None
+        }
+    })
+    .as_ref()
+}

@@ -1,0 +1,259 @@
+//! The basis form (version 2) of a conversion: the spectral file the conversion wrote, factored
+//! into K spectra of its own and K coefficients per pixel.
+//!
+//! Stages: [`analyse`] reads the spectral file once (the second moments of its pixels' spectra,
+//! the sun's pixels summed apart), [`OwnBasis`] picks the components, and [`write`] reads it again
+//! and writes, per pixel, the colour-keeping coefficients (the sun's pixels: their luminance on
+//! the sun's spectrum), R, G, B, and in the header the spectra:
+//! - channels `k00` .. `k{K-1}` and `R`, `G`, `B` as the spectral file's, in the conversion's
+//!   precision (the components are orthonormal, so half floats round a pixel's spectrum by
+//!   about as much as they round its bands), divided by 2^`EV` where half floats need it;
+//! - `specmap.basisVersion` 2, `specmap.basisK` K, `specmap.wavelengths` (nm),
+//!   `specmap.basis00` .. (float vectors, the spectra in the spectral file's radiance units),
+//!   `specmap.basisSun` (the sun's spectrum's index, -1 without a sun), and the spectral file's
+//!   own attributes. A pixel's radiance is `sum_j k_j basis_j`.
+
+use super::exrio::{
+    self, AttrValue, ChannelSet, Compression, Precision, SpectralLayout, SpectralWriter, HALF_MAX,
+};
+use super::layout::{detect, EnvMap, Layout};
+use super::own_basis::{BandColour, Moments, OwnBasis, DEFAULT_DISCARD, MAX_K};
+use super::RgbImage;
+use crate::error::{Error, Result};
+use std::path::Path;
+
+/// How the basis form holds its spectral file.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct BasisStats {
+    /// Spectra, the sun's included.
+    pub k: usize,
+    /// Whether one of them is the sun's.
+    pub sun: bool,
+    /// The share of the non-sun pixels' spectral energy outside the spectra (see
+    /// [`super::own_basis`]).
+    pub discarded: f64,
+    /// The largest relative spectral residual of a pixel, and where.
+    pub max_residual: f64,
+    pub max_residual_at: [usize; 2],
+    /// Pixels whose spectrum the spectra hold to worse than 1%.
+    pub pixels_over_1_percent: usize,
+    /// Whether every pixel keeps its colour exactly.
+    pub keeps_colour: bool,
+    /// Half floats: the values were divided by 2^EV (None: not needed, or float).
+    pub ev: Option<f64>,
+    /// Half floats: pixels whose every coefficient is below half's smallest (written as 0).
+    pub below_half: usize,
+}
+
+/// What the first read found.
+pub struct Analysis {
+    pub basis: OwnBasis,
+    /// The sun's SPD (the mean of its pixels' spectra) at luminance 1, and the mask.
+    pub sun: Option<Vec<f64>>,
+    mask: Vec<bool>,
+    colour: BandColour,
+    wavelengths: Vec<f64>,
+    /// The largest spectrum norm (a bound on every coefficient) or sun luminance.
+    peak: f64,
+}
+
+/// Reads `spectral` once: the moments of its non-sun pixels and the sun's pixels' mean spectrum.
+pub fn analyse(spectral: &Path) -> Result<Analysis> {
+    let info = exrio::read_spectral_info(spectral)?;
+    let (w, h) = (info.width, info.height);
+    let wl = info.wavelengths_nm.clone();
+    let n = wl.len();
+    let colour = BandColour::new(&wl)?;
+    let mask: Vec<bool> = exrio::read_stored_channel(spectral, "sun")
+        .map(|m| m.iter().map(|&v| v > 0.5).collect())
+        .unwrap_or_else(|| vec![false; w * h]);
+    let layout = detect(
+        w,
+        h,
+        info.envmap.map(|a| match a {
+            exrio::EnvmapAttr::LatLong => Layout::LatLong,
+            exrio::EnvmapAttr::Cube => Layout::Cube,
+        }),
+    )
+    .map_err(|e| Error::invalid(format!("{}: {e}", spectral.display())))?;
+    let geo = EnvMap::new(layout, RgbImage::new(w, h))
+        .map_err(|e| Error::invalid(format!("{}: {e}", spectral.display())))?;
+    let mut moments = Moments::new(n);
+    let mut peak = 0f64;
+    let mut sun = vec![0.0; n];
+    let mut s = vec![0.0; n];
+    exrio::read_spectral_rows(spectral, |y, row| {
+        let per = row.len() / w;
+        for x in 0..w {
+            for (a, v) in s.iter_mut().zip(&row[x * per..x * per + n]) {
+                *a = if v.is_finite() { *v as f64 } else { 0.0 };
+            }
+            let omega = geo.solid_angle(x, y).max(1e-12);
+            let norm = s.iter().map(|v| v * v).sum::<f64>().sqrt();
+            peak = peak.max(norm);
+            if mask[y * w + x] {
+                peak = peak.max(colour.luminance(&s));
+                for (a, v) in sun.iter_mut().zip(&s) {
+                    *a += omega * v;
+                }
+            } else {
+                moments.add(&s, omega, colour.luminance(&s));
+            }
+        }
+    })?;
+    let y = colour.luminance(&sun);
+    let sun = (y > 0.0).then(|| sun.iter().map(|v| v / y).collect::<Vec<f64>>());
+    let room = MAX_K - sun.is_some() as usize;
+    let basis = OwnBasis::from_moments(&moments, &colour.weights, DEFAULT_DISCARD, room)?;
+    Ok(Analysis {
+        basis,
+        sun,
+        mask,
+        colour,
+        wavelengths: wl,
+        peak,
+    })
+}
+
+/// Writes the basis form of `spectral` to `output` (through a temporary file beside it).
+pub fn write(
+    spectral: &Path,
+    a: &Analysis,
+    output: &Path,
+    precision: Precision,
+    compression: Compression,
+    zip_level: u8,
+) -> Result<(BasisStats, u64)> {
+    let info = exrio::read_spectral_info(spectral)?;
+    let (w, h) = (info.width, info.height);
+    let n = a.wavelengths.len();
+    let kb = a.basis.len();
+    let k = kb + a.sun.is_some() as usize;
+    let mut names: Vec<String> = (0..k).map(|j| format!("k{j:02}")).collect();
+    if info.has_rgb {
+        names.extend(["R", "G", "B"].map(String::from));
+    }
+    let per_out = names.len();
+    let floats = |v: &[f64]| AttrValue::F32Vec(v.iter().map(|&x| x as f32).collect());
+    let mut attributes: Vec<(String, AttrValue)> = info
+        .attributes
+        .iter()
+        .filter(|(n, _)| n.starts_with("specmap.") && !n.starts_with("specmap.basis"))
+        .cloned()
+        .collect();
+    attributes.push(("specmap.basisVersion".into(), AttrValue::I32(2)));
+    attributes.push(("specmap.basisK".into(), AttrValue::I32(k as i32)));
+    attributes.retain(|(n, _)| n != "specmap.wavelengths");
+    attributes.push(("specmap.wavelengths".into(), floats(&a.wavelengths)));
+    for (j, b) in a.basis.spectra.iter().enumerate() {
+        attributes.push((format!("specmap.basis{j:02}"), floats(b)));
+    }
+    let sun_index = a.sun.as_ref().map(|s| {
+        attributes.push((format!("specmap.basis{kb:02}"), floats(s)));
+        kb as i32
+    });
+    attributes.push((
+        "specmap.basisSun".into(),
+        AttrValue::I32(sun_index.unwrap_or(-1)),
+    ));
+    let ev = (precision == Precision::Half && a.peak > HALF_MAX as f64)
+        .then(|| (a.peak / HALF_MAX as f64).log2().ceil());
+    let smallest = 2f64.powi(-25) * ev.unwrap_or(0.0).exp2();
+    let mut writer = SpectralWriter::create(
+        output,
+        SpectralLayout {
+            width: w,
+            height: h,
+            channels: ChannelSet::Custom(names),
+            precision,
+            compression,
+            envmap: info.envmap,
+            ev,
+            attributes,
+            zip_level,
+            unscaled: Vec::new(),
+        },
+    )?;
+    let mut stats = BasisStats {
+        k,
+        sun: a.sun.is_some(),
+        discarded: a.basis.discarded,
+        max_residual: 0.0,
+        max_residual_at: [0, 0],
+        pixels_over_1_percent: 0,
+        keeps_colour: a.basis.keeps_colour,
+        ev: if precision == Precision::Half {
+            ev
+        } else {
+            None
+        },
+        below_half: 0,
+    };
+    let mut s = vec![0.0; n];
+    let mut c = vec![0.0; kb];
+    let mut failed = None;
+    exrio::read_spectral_rows(spectral, |y, row| {
+        let per = row.len() / w;
+        let mut out = vec![0f32; w * per_out];
+        for x in 0..w {
+            let px = &row[x * per..(x + 1) * per];
+            for (a, v) in s.iter_mut().zip(&px[..n]) {
+                *a = if v.is_finite() { *v as f64 } else { 0.0 };
+            }
+            let o = &mut out[x * per_out..(x + 1) * per_out];
+            let r = match &a.sun {
+                Some(sun) if a.mask[y * w + x] => {
+                    let l = a.colour.luminance(&s);
+                    o[kb] = l as f32;
+                    relative(&s, |i| l * sun[i])
+                }
+                _ => {
+                    a.basis.project(&s, &mut c);
+                    for (o, v) in o.iter_mut().zip(&c) {
+                        *o = *v as f32;
+                    }
+                    a.basis.relative_residual(&s, &c)
+                }
+            };
+            if r > stats.max_residual {
+                stats.max_residual = r;
+                stats.max_residual_at = [x, y];
+            }
+            stats.pixels_over_1_percent += (r > 0.01) as usize;
+            let lit = o[..k].iter().any(|v| *v != 0.0);
+            if precision == Precision::Half
+                && lit
+                && o[..k].iter().all(|v| (v.abs() as f64) < smallest)
+            {
+                stats.below_half += 1;
+            }
+            if info.has_rgb {
+                o[k..k + 3].copy_from_slice(&px[n..n + 3]);
+            }
+        }
+        if failed.is_none() {
+            if let Err(e) = writer.write_rows(y, &out) {
+                failed = Some(e);
+            }
+        }
+    })?;
+    if let Some(e) = failed {
+        return Err(e);
+    }
+    let bytes = writer.finish()?;
+    Ok((stats, bytes))
+}
+
+/// `|s - f| / |s|` (0 for a black spectrum).
+fn relative(s: &[f64], f: impl Fn(usize) -> f64) -> f64 {
+    let (mut r2, mut s2) = (0.0, 0.0);
+    for (i, v) in s.iter().enumerate() {
+        r2 += (f(i) - v).powi(2);
+        s2 += v * v;
+    }
+    if s2 > 0.0 {
+        (r2 / s2).sqrt()
+    } else {
+        0.0
+    }
+}

@@ -1,0 +1,590 @@
+//! Lighting from the spectra a map holds: a spectral OpenEXR (from `specmap convert` or any other
+//! tool) or a basis OpenEXR of the K-spectrum form, whatever `--light` says.
+//!
+//! A spectral file's pixels are averaged into the renderer's lat-long ([`env::SOURCE_ROWS`] rows;
+//! each pixel adds its spectrum times its solid angle to the texel its centre falls in), the sun's
+//! pixels apart: they become the directional light, with the mean of their own spectra as its
+//! SPD. The texels' spectra are then projected onto their own principal components
+//! ([`crate::envmap::own_basis`]), keeping each texel's colour: K coefficients per texel and K
+//! spectra, exact for what `convert` writes (its spectra span a few dimensions), within a stated
+//! share for a foreign file. [`Spectra::Full`] keeps every band instead (K = N, no projection):
+//! the reference the projection is tested against.
+
+use super::env::{self, CoeffMap, EnvReport, MAX_RADIANCE};
+use super::{Environment, LightSpectra, Lighting, Sun};
+use crate::colorimetry::RgbSpace;
+use crate::envmap::exrio::{self, AttrValue, EnvmapAttr};
+use crate::envmap::layout::{detect, EnvMap, Layout};
+use crate::envmap::own_basis::{
+    BandColour as Colour, Moments, OwnBasis, Projection, DEFAULT_DISCARD, MAX_K,
+};
+use crate::envmap::sun::{find_sun, SunSettings};
+use crate::envmap::RgbImage;
+use crate::error::{Error, Result};
+use crate::spectrum::Tabulated;
+use std::f64::consts::PI;
+use std::path::Path;
+use std::sync::Arc;
+
+/// Which spectra a spectral file's texels expand with.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Spectra {
+    /// Its own principal components (what `specmap render --env` does).
+    Own,
+    /// Every band (K = N): no projection, the CPU reference.
+    Full,
+}
+
+/// Per-pixel values averaged into a lat-long of `rows` rows by solid angle.
+struct Texels {
+    w: usize,
+    h: usize,
+    per: usize,
+    acc: Vec<f64>,
+    weight: Vec<f64>,
+}
+
+impl Texels {
+    fn new(rows: usize, per: usize) -> Texels {
+        let (w, h) = (2 * rows, rows);
+        Texels {
+            w,
+            h,
+            per,
+            acc: vec![0.0; w * h * per],
+            weight: vec![0.0; w * h],
+        }
+    }
+
+    fn index(&self, d: [f64; 3]) -> usize {
+        let u = 0.5 - d[0].atan2(d[2]) / (2.0 * PI);
+        let v = d[1].clamp(-1.0, 1.0).acos() / PI;
+        let x = ((u * self.w as f64).floor() as i64).rem_euclid(self.w as i64) as usize;
+        let y = ((v * self.h as f64).floor().max(0.0) as usize).min(self.h - 1);
+        y * self.w + x
+    }
+
+    fn add(&mut self, d: [f64; 3], omega: f64, values: &[f64]) {
+        let t = self.index(d);
+        self.weight[t] += omega;
+        for (a, v) in self.acc[t * self.per..(t + 1) * self.per]
+            .iter_mut()
+            .zip(values)
+        {
+            *a += omega * v;
+        }
+    }
+
+    /// The means; a texel no pixel fell in takes its filled neighbours' mean (a map coarser
+    /// than the renderer's near the poles or at a cube's seams).
+    fn finish(mut self) -> Vec<f64> {
+        let (w, h, per) = (self.w, self.h, self.per);
+        for t in 0..w * h {
+            if self.weight[t] > 0.0 {
+                for v in &mut self.acc[t * per..(t + 1) * per] {
+                    *v /= self.weight[t];
+                }
+            }
+        }
+        let mut filled: Vec<bool> = self.weight.iter().map(|&x| x > 0.0).collect();
+        for _ in 0..w.max(h) {
+            let missing: Vec<usize> = (0..w * h).filter(|&t| !filled[t]).collect();
+            if missing.is_empty() || !filled.iter().any(|&f| f) {
+                break;
+            }
+            let mut updates = Vec::new();
+            for &t in &missing {
+                let (x, y) = (t % w, t / w);
+                let near = [
+                    y * w + (x + 1) % w,
+                    y * w + (x + w - 1) % w,
+                    y.saturating_sub(1) * w + x,
+                    (y + 1).min(h - 1) * w + x,
+                ];
+                let src: Vec<usize> = near.into_iter().filter(|&n| filled[n]).collect();
+                if !src.is_empty() {
+                    let mean: Vec<f64> = (0..per)
+                        .map(|k| src.iter().map(|&n| self.acc[n * per + k]).sum::<f64>())
+                        .map(|v| v / src.len() as f64)
+                        .collect();
+                    updates.push((t, mean));
+                }
+            }
+            for (t, mean) in updates {
+                self.acc[t * per..(t + 1) * per].copy_from_slice(&mean);
+                filled[t] = true;
+            }
+        }
+        self.acc
+    }
+}
+
+/// The renderer's lat-long rows for a map of `used` pixels: at least two source pixels a texel
+/// side, at most [`env::SOURCE_ROWS`].
+fn rows_for(used: usize) -> usize {
+    let latlong_rows = ((used as f64) / 2.0).sqrt();
+    ((latlong_rows / 2.0).floor() as usize).clamp(1, env::SOURCE_ROWS)
+}
+
+fn layout_of(path: &Path, w: usize, h: usize, attr: Option<EnvmapAttr>) -> Result<Layout> {
+    let attr = attr.map(|a| match a {
+        EnvmapAttr::LatLong => Layout::LatLong,
+        EnvmapAttr::Cube => Layout::Cube,
+    });
+    detect(w, h, attr).map_err(|e| Error::invalid(format!("{}: {e}", path.display())))
+}
+
+/// An RGB-less map of the layout, for its directions and solid angles.
+fn geometry(path: &Path, layout: Layout, w: usize, h: usize) -> Result<EnvMap> {
+    EnvMap::new(layout, RgbImage::new(w, h))
+        .map_err(|e| Error::invalid(format!("{}: {e}", path.display())))
+}
+
+fn too_bright(path: &Path, x: usize, y: usize, v: f64) -> Error {
+    Error::invalid(format!(
+        "{}: pixel ({x}, {y}) value {v:e} exceeds {MAX_RADIANCE:e}, beyond what the renderer's \
+         f32 arithmetic carries; scale the map down (e.g. convert it with an exposure)",
+        path.display()
+    ))
+}
+
+/// The sun's pixels of a spectral file: its `sun` mask (what `convert` found), else the sun
+/// found in its colours as `convert` would.
+fn sun_mask(path: &Path, geo: &EnvMap, n: usize, colour: &Colour) -> Result<Vec<bool>> {
+    if let Some(mask) = exrio::read_stored_channel(path, "sun") {
+        return Ok(mask.iter().map(|&v| v > 0.5).collect());
+    }
+    let (w, h) = (geo.image.width, geo.image.height);
+    let mut preview = RgbImage::new(w, h);
+    let to_rgb = RgbSpace::SRGB.from_xyz_matrix();
+    let y_norm = colour
+        .weights
+        .iter()
+        .map(|c| c[1])
+        .sum::<f64>()
+        .max(f64::MIN_POSITIVE);
+    exrio::read_spectral_rows(path, |y, row| {
+        let per = row.len() / w;
+        for x in 0..w {
+            let px = &row[x * per..x * per + n];
+            if !px.iter().all(|v| v.is_finite()) {
+                continue;
+            }
+            let xyz = nalgebra::Vector3::from_fn(|r, _| {
+                px.iter()
+                    .zip(&colour.weights)
+                    .map(|(v, c)| (*v as f64) * c[r])
+                    .sum::<f64>()
+                    / y_norm
+            });
+            let rgb = to_rgb * xyz;
+            preview.pixels[y * w + x] = [0, 1, 2].map(|k| (rgb[k] as f32).max(0.0));
+        }
+    })?;
+    let map = EnvMap::new(geo.layout, preview)
+        .map_err(|e| Error::invalid(format!("{}: {e}", path.display())))?;
+    let mut mask = vec![false; w * h];
+    if let Some(sun) = find_sun(&map, &RgbSpace::SRGB, &SunSettings::default()).sun() {
+        for &i in &sun.pixels {
+            mask[i] = true;
+        }
+    }
+    Ok(mask)
+}
+
+/// The sun's pixels summed: `sum omega s` and `sum omega Y(s) dir`.
+struct SunSum {
+    spectrum: Vec<f64>,
+    dir: [f64; 3],
+}
+
+impl SunSum {
+    fn light(&self, colour: &Colour, wl: &[f64]) -> Result<Option<(Sun, Tabulated)>> {
+        let e = colour.luminance(&self.spectrum);
+        let n = (self.dir.iter().map(|v| v * v).sum::<f64>()).sqrt();
+        if !(e > 0.0 && n > 0.0) {
+            return Ok(None);
+        }
+        let spd = Tabulated::new(wl.to_vec(), self.spectrum.iter().map(|v| v / e).collect())?;
+        let sun = Sun {
+            direction: self.dir.map(|v| v / n),
+            irradiance: e,
+        };
+        Ok(Some((sun, spd)))
+    }
+}
+
+/// Loads a spectral OpenEXR as a lighting of its own spectra (see the module docs).
+pub fn load_spectral(path: &Path, spectra: Spectra) -> Result<(Lighting, EnvReport)> {
+    let info = exrio::read_spectral_info(path)?;
+    let wl = info.wavelengths_nm.clone();
+    let n = wl.len();
+    let (w, h) = (info.width, info.height);
+    let colour = Colour::new(&wl)?;
+    let geo = geometry(path, layout_of(path, w, h, info.envmap)?, w, h)?;
+    let mask = sun_mask(path, &geo, n, &colour)?;
+    let mut texels = Texels::new(rows_for(geo.used_pixels()), n);
+    let mut sun = SunSum {
+        spectrum: vec![0.0; n],
+        dir: [0.0; 3],
+    };
+    let mut too_large = None;
+    let mut px = vec![0.0f64; n];
+    exrio::read_spectral_rows(path, |y, row| {
+        let per = row.len() / w;
+        for x in 0..w {
+            let (Some(d), omega) = (geo.direction(x, y), geo.solid_angle(x, y)) else {
+                continue;
+            };
+            let raw = &row[x * per..x * per + n];
+            // A pixel with a NaN or infinite band is black (as `convert` treats them); one
+            // beyond MAX_RADIANCE stops the load.
+            if !raw.iter().all(|v| v.is_finite()) {
+                continue;
+            }
+            let peak = raw.iter().fold(0f64, |m, &v| m.max((v as f64).abs()));
+            if peak > MAX_RADIANCE {
+                too_large.get_or_insert((x, y, peak));
+                continue;
+            }
+            for (p, v) in px.iter_mut().zip(raw) {
+                *p = *v as f64;
+            }
+            if mask[y * w + x] {
+                let yl = colour.luminance(&px).max(0.0);
+                for (a, v) in sun.spectrum.iter_mut().zip(&px) {
+                    *a += omega * v;
+                }
+                for (a, dk) in sun.dir.iter_mut().zip(d) {
+                    *a += omega * yl * dk;
+                }
+                // The sun's solid angle stays in its texel, dark: its light is the sun's now.
+                px.iter_mut().for_each(|v| *v = 0.0);
+                texels.add(d, omega, &px);
+            } else {
+                texels.add(d, omega, &px);
+            }
+        }
+    })?;
+    if let Some((x, y, v)) = too_large {
+        return Err(too_bright(path, x, y, v));
+    }
+    let (tw, th) = (texels.w, texels.h);
+    let values = texels.finish();
+    let sun = sun.light(&colour, &wl)?;
+    let text = |name: &str| {
+        info.attributes.iter().find_map(|(k, v)| match v {
+            AttrValue::Text(t) if k == name => Some(t.clone()),
+            _ => None,
+        })
+    };
+    let light = text("specmap.light").unwrap_or_else(|| "the file's own spectra".into());
+    let (basis, coeffs, projection) = match spectra {
+        Spectra::Full => {
+            let k = n;
+            let basis: Vec<Vec<f64>> = (0..n)
+                .map(|j| (0..n).map(|i| (i == j) as u8 as f64).collect())
+                .collect();
+            (
+                basis,
+                pack(&values, n, k, tw, th, |s, out| out.copy_from_slice(s)),
+                None,
+            )
+        }
+        Spectra::Own => {
+            let (basis, coeffs, p) = project(&values, n, tw, th, &colour)?;
+            (basis, coeffs, Some(p))
+        }
+    };
+    let (sun_dir, sun_irr) = (
+        sun.as_ref().map(|s| s.0.direction),
+        sun.as_ref().map(|s| s.0.irradiance),
+    );
+    let (sun, sun_spd, sun_label) = match &sun {
+        Some((s, spd)) => (
+            Some(*s),
+            spd.clone(),
+            "the sun pixels' own spectrum".to_string(),
+        ),
+        None => (
+            None,
+            crate::data::spectrum(env::SUN_SPD)?.data,
+            "none".to_string(),
+        ),
+    };
+    let spectra_tab = basis
+        .into_iter()
+        .map(|b| Tabulated::new(wl.clone(), b))
+        .collect::<Result<Vec<_>>>()?;
+    let k = spectra_tab.len();
+    let lighting = Lighting {
+        label: light.clone(),
+        spectra: LightSpectra::Own {
+            spectra: spectra_tab,
+            sun_spd,
+            sun_label: sun_label.clone(),
+        },
+        environment: Environment::Map(Arc::new(coeffs)),
+        sun,
+    };
+    let report = EnvReport {
+        file: path.display().to_string(),
+        kind: "spectral",
+        input_size: [w, h],
+        light,
+        light_used: false,
+        sun_spd: sun_label,
+        sun_direction: sun_dir,
+        sun_irradiance: sun_irr,
+        spectra: k,
+        projection,
+    };
+    Ok((lighting, report))
+}
+
+/// A coefficient map of `k` values per texel, each texel's from its `per` values by `f`.
+fn pack(
+    values: &[f64],
+    per: usize,
+    k: usize,
+    w: usize,
+    h: usize,
+    f: impl Fn(&[f64], &mut [f64]),
+) -> CoeffMap {
+    let groups = k.div_ceil(4).max(1);
+    let mut texels = vec![[0f32; 4]; w * h * groups];
+    let mut c = vec![0.0; k];
+    for t in 0..w * h {
+        f(&values[t * per..(t + 1) * per], &mut c);
+        for (j, v) in c.iter().enumerate() {
+            texels[t * groups + j / 4][j % 4] = *v as f32;
+        }
+    }
+    CoeffMap {
+        width: w,
+        height: h,
+        groups,
+        texels,
+    }
+}
+
+/// The texels' own basis, their coefficients and how well they are held.
+fn project(
+    values: &[f64],
+    n: usize,
+    w: usize,
+    h: usize,
+    colour: &Colour,
+) -> Result<(Vec<Vec<f64>>, CoeffMap, Projection)> {
+    let mut m = Moments::new(n);
+    for t in 0..w * h {
+        let s = &values[t * n..(t + 1) * n];
+        m.add(s, env::solid_angle(w, h, t / w), colour.luminance(s));
+    }
+    let basis = OwnBasis::from_moments(&m, &colour.weights, DEFAULT_DISCARD, MAX_K)?;
+    let k = basis.len();
+    let coeffs = pack(values, n, k, w, h, |s, out| basis.project(s, out));
+    let (mut worst, mut at, mut sum, mut weight) = (0.0f64, 0usize, 0.0, 0.0);
+    let mut c = vec![0.0; k];
+    for t in 0..w * h {
+        let s = &values[t * n..(t + 1) * n];
+        basis.project(s, &mut c);
+        let r = basis.relative_residual(s, &c);
+        let e = env::solid_angle(w, h, t / w) * colour.luminance(s).max(0.0);
+        sum += r * e;
+        weight += e;
+        if r > worst {
+            (worst, at) = (r, t);
+        }
+    }
+    let d = env::direction(w, h, at % w, at / w);
+    let azimuth = d[0].atan2(d[2]).to_degrees();
+    let elevation = d[1].clamp(-1.0, 1.0).asin().to_degrees();
+    let mean = if weight > 0.0 { sum / weight } else { 0.0 };
+    let summary = format!(
+        "the map is held by {k} spectra of its own: {:.2e} of its spectral energy lies outside \
+         them; the light from any direction is within {:.2}% of its spectrum (worst at azimuth \
+         {azimuth:.0}, elevation {elevation:.0} degrees; {:.3}% on average){}",
+        basis.discarded,
+        100.0 * worst,
+        100.0 * mean,
+        if basis.keeps_colour {
+            ", and keeps its colour exactly"
+        } else {
+            ""
+        }
+    );
+    let p = Projection {
+        k,
+        discarded: basis.discarded,
+        max_residual: worst,
+        max_residual_at: [azimuth, elevation],
+        mean_residual: mean,
+        keeps_colour: basis.keeps_colour,
+        summary,
+    };
+    Ok((basis.spectra.clone(), coeffs, p))
+}
+
+/// Loads a basis OpenEXR of the K-spectrum form (`specmap convert --format basis`, version 2):
+/// channels `k00`..`k{K-1}`, the spectra in `specmap.basis00`.. on `specmap.wavelengths`, the
+/// sun's spectrum's index in `specmap.basisSun` (its coefficient becomes the directional light).
+pub fn load_basis_k(path: &Path) -> Result<(Lighting, EnvReport)> {
+    use exr::prelude::read_first_flat_layer_from_file;
+    let bad = |what: String| Error::invalid(format!("{}: {what}", path.display()));
+    let image = read_first_flat_layer_from_file(path)
+        .map_err(|e| bad(format!("reading the basis OpenEXR: {e}")))?;
+    let layer = &image.layer_data;
+    let (w, h) = (layer.size.0, layer.size.1);
+    let attrs: Vec<(String, AttrValue)> = layer
+        .attributes
+        .other
+        .iter()
+        .chain(image.attributes.other.iter())
+        .filter_map(|(n, v)| exrio::attr_from_exr(v).map(|a| (n.to_string(), a)))
+        .collect();
+    let get = |name: &str| {
+        attrs
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, v)| v.clone())
+    };
+    let floats = |name: &str| match get(name) {
+        Some(AttrValue::F32Vec(v)) => Ok(v.iter().map(|&x| x as f64).collect::<Vec<f64>>()),
+        _ => Err(bad(format!(
+            "a K-spectrum basis map needs the float-vector attribute {name}"
+        ))),
+    };
+    let int = |name: &str| match get(name) {
+        Some(AttrValue::I32(v)) => Some(v as i64),
+        Some(AttrValue::F32(v)) => Some(v as i64),
+        _ => None,
+    };
+    let k = int("specmap.basisK")
+        .filter(|&k| k > 0 && k <= 100)
+        .ok_or_else(|| bad("a K-spectrum basis map needs specmap.basisK (1 to 100)".into()))?
+        as usize;
+    let wl = floats("specmap.wavelengths")?;
+    let colour = Colour::new(&wl)?;
+    let spectra: Vec<Vec<f64>> = (0..k)
+        .map(|j| {
+            let s = floats(&format!("specmap.basis{j:02}"))?;
+            if s.len() != wl.len() {
+                return Err(bad(format!(
+                    "specmap.basis{j:02} has {} values for {} wavelengths",
+                    s.len(),
+                    wl.len()
+                )));
+            }
+            Ok(s)
+        })
+        .collect::<Result<_>>()?;
+    let sun_index = int("specmap.basisSun").filter(|&i| i >= 0 && (i as usize) < k);
+    let ev = match get("EV") {
+        Some(AttrValue::F32(x)) => x as f64,
+        _ => 0.0,
+    };
+    let scale = ev.exp2();
+    let channel = |name: &str| -> Result<Vec<f32>> {
+        layer
+            .channel_data
+            .list
+            .iter()
+            .find(|c| c.name.to_string() == name)
+            .map(|c| c.sample_data.values_as_f32().collect())
+            .ok_or_else(|| bad(format!("no channel {name} (specmap.basisK is {k})")))
+    };
+    let coef: Vec<Vec<f32>> = (0..k)
+        .map(|j| channel(&format!("k{j:02}")))
+        .collect::<Result<_>>()?;
+    let envmap = [&layer.attributes.other, &image.attributes.other]
+        .iter()
+        .find_map(|a| a.get(&exr::meta::attribute::Text::from("envmap")))
+        .and_then(|v| match v {
+            exr::meta::attribute::AttributeValue::EnvironmentMap(
+                exr::meta::attribute::EnvironmentMap::Cube,
+            ) => Some(EnvmapAttr::Cube),
+            exr::meta::attribute::AttributeValue::EnvironmentMap(_) => Some(EnvmapAttr::LatLong),
+            _ => None,
+        });
+    let geo = geometry(path, layout_of(path, w, h, envmap)?, w, h)?;
+    let mut texels = Texels::new(rows_for(geo.used_pixels()), k);
+    let mut sun = SunSum {
+        spectrum: vec![0.0; wl.len()],
+        dir: [0.0; 3],
+    };
+    let sun_y = sun_index.map(|i| colour.luminance(&spectra[i as usize]));
+    let mut c = vec![0.0; k];
+    for y in 0..h {
+        for x in 0..w {
+            let (Some(d), omega) = (geo.direction(x, y), geo.solid_angle(x, y)) else {
+                continue;
+            };
+            let i = y * w + x;
+            for j in 0..k {
+                let v = coef[j][i] as f64 * scale;
+                c[j] = if v.is_finite() { v } else { 0.0 };
+            }
+            let peak = c.iter().fold(0f64, |m, v| m.max(v.abs()));
+            if peak > MAX_RADIANCE {
+                return Err(too_bright(path, x, y, peak));
+            }
+            if let (Some(si), Some(sy)) = (sun_index, sun_y) {
+                let si = si as usize;
+                let a = c[si].max(0.0);
+                if a > 0.0 {
+                    for (acc, b) in sun.spectrum.iter_mut().zip(&spectra[si]) {
+                        *acc += omega * a * b;
+                    }
+                    for (acc, dq) in sun.dir.iter_mut().zip(d) {
+                        *acc += omega * a * sy * dq;
+                    }
+                }
+                c[si] = 0.0;
+            }
+            texels.add(d, omega, &c);
+        }
+    }
+    let (tw, th) = (texels.w, texels.h);
+    let values = texels.finish();
+    let coeffs = pack(&values, k, k, tw, th, |s, out| out.copy_from_slice(s));
+    let sun = sun.light(&colour, &wl)?;
+    let light = match get("specmap.light") {
+        Some(AttrValue::Text(t)) => t,
+        _ => "the file's own spectra".into(),
+    };
+    let (sun_light, sun_spd, sun_label) = match &sun {
+        Some((s, spd)) => (Some(*s), spd.clone(), "the file's sun spectrum".to_string()),
+        None => (
+            None,
+            crate::data::spectrum(env::SUN_SPD)?.data,
+            "none".to_string(),
+        ),
+    };
+    let lighting = Lighting {
+        label: light.clone(),
+        spectra: LightSpectra::Own {
+            spectra: spectra
+                .into_iter()
+                .map(|s| Tabulated::new(wl.clone(), s))
+                .collect::<Result<_>>()?,
+            sun_spd,
+            sun_label: sun_label.clone(),
+        },
+        environment: Environment::Map(Arc::new(coeffs)),
+        sun: sun_light,
+    };
+    let report = EnvReport {
+        file: path.display().to_string(),
+        kind: "basis-k",
+        input_size: [w, h],
+        light,
+        light_used: false,
+        sun_spd: sun_label,
+        sun_direction: sun_light.map(|s| s.direction),
+        sun_irradiance: sun_light.map(|s| s.irradiance),
+        spectra: k,
+        projection: None,
+    };
+    Ok((lighting, report))
+}
