@@ -468,6 +468,56 @@ def test_basis_v2_from_specmap_matches_its_spectral_conversion(plugin, maps):
         assert rel.max() < 0.01, (name, rel.max(), np.median(rel))
 
 
+def write_basis_v1(dst, ev=2.0, sun=5e3, half=False, seed=5):
+    """A basis v1 file to the --format basis layout of specmap before v2: random c_R, c_G, c_B
+    (divided by 2^EV) on CIE daylight's S0, S1, S2 (colour-science), one texel's `sun` weight
+    (unscaled) on D65. Returns the radiance it stands for (h, w, N) and the wavelengths."""
+    from colour.colorimetry import SDS_BASIS_FUNCTIONS_CIE_ILLUMINANT_D_SERIES as D
+    shape = colour.SpectralShape(380, 780, 5)
+    wl = shape.wavelengths
+    basis = np.stack([D[k].copy().align(shape).values for k in ("S0", "S1", "S2")]) / 100
+    spd = colour.SDS_ILLUMINANTS["D65"].copy().align(shape).values / 100
+    rng = np.random.default_rng(seed)
+    c = rng.uniform(0.0, 3.0, (32, 64, 3)) * [1.0, 0.1, 0.1]
+    weight = np.zeros((32, 64))
+    weight[10, 20] = sun
+    dtype = np.float16 if half else np.float32
+    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage,
+              "envmap": OpenEXR.ENVMAP_LATLONG, "EV": float(ev),
+              "specmap.wavelengths": [float(x) for x in wl],
+              "specmap.sunSPD": [float(x) for x in spd]}
+    header.update({f"specmap.basis{j}": [float(x) for x in basis[j]] for j in range(3)})
+    channels = {n: (c[..., j] / 2 ** ev).astype(dtype) for j, n in enumerate(("c_R", "c_G", "c_B"))}
+    channels["sun"] = weight.astype(dtype)
+    with OpenEXR.File(header, channels) as f:
+        f.write(str(dst))
+    return c @ basis + weight[..., None] * spd, wl
+
+
+def test_basis_v1_layout_reads_to_its_definition(plugin, tmp_path):
+    """A v1 file written here (EV = 2 on c_R, c_G, c_B, the sun's weight unscaled): along
+    specmap's texel centres the emitter gives c B + sun SPD, the sun texel included."""
+    want, wl = write_basis_v1(tmp_path / "v1.exr")
+    em = basis_emitter(tmp_path / "v1.exr")
+    assert em.kind == "basis"
+    h, w = want.shape[:2]
+    idx = np.concatenate([sample_texels(w, h, n=100), [[10, 20]]])
+    dirs = specmap_directions(w, h)[idx[:, 0], idx[:, 1]]
+    bands = [450.0, 550.0, 600.0, 700.0]
+    got = eval_at(em, dirs, bands) / plugin.radiometric_factor()
+    cols = [int(np.argmin(np.abs(wl - b))) for b in bands]
+    np.testing.assert_allclose(got, want[idx[:, 0], idx[:, 1]][:, cols], rtol=1e-5,
+                               atol=1e-6 * want.max())
+
+
+def test_a_v1_sun_that_overflowed_half_floats_is_refused(plugin, tmp_path):
+    """specmap's v1 writer stored the sun channel unscaled by EV: a bright sun is inf in half
+    floats. The emitter says so, and how to convert, rather than drawing no sun."""
+    write_basis_v1(tmp_path / "v1.exr", sun=1e6, half=True)
+    msg = load_error(tmp_path / "v1.exr")
+    assert "v1.exr" in msg and "sun channel" in msg and "--precision float" in msg
+
+
 # ----------------------------------------------------------------------------- clear errors
 
 def load_error(path, **extra):
