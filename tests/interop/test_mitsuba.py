@@ -122,7 +122,9 @@ def maps(specmap, tmp_path_factory):
         out[name] = {"rgb": rgb,
                      "spectral": convert(rgb, d / f"{name}.spectral.exr"),
                      "basis": convert(rgb, d / f"{name}.basis.exr", "--format", "basis",
-                                      "--precision", "float")}
+                                      "--precision", "float"),
+                     "basis-half": convert(rgb, d / f"{name}.basis-half.exr", "--format",
+                                           "basis")}
     rgb = d / "sunrise-128.exr"
     write_rgb(rgb, downscaled(ROOT / "envmaps" / "sunrise.exr", 8))
     out["sunrise-128"] = {"rgb": rgb, "spectral": convert(rgb, d / "sunrise-128.spectral.exr"),
@@ -450,10 +452,12 @@ def test_basis_v2_reads_as_the_same_spectra(plugin, maps, tmp_path):
 
 def test_basis_v2_from_specmap_matches_its_spectral_conversion(plugin, maps):
     """specmap's own basis v2 output (--format basis, K spectra of the map's own, the sun's
-    among them, EV for the bright map) gives the spectra of the same map's spectral conversion
-    to 1 % at every checked texel (the writer reports every pixel held to better than 1 %)."""
-    for name in ("sunrise-128", "sunrise"):
-        basis, spectral = maps[name]["basis"], maps[name]["spectral"]
+    among them; float, and half with EV for the bright map) gives the spectra of the same
+    map's spectral conversion to 1 % at every checked texel (the writer reports every pixel
+    held to better than 1 %)."""
+    for name, kind in (("sunrise-128", "basis"), ("sunrise", "basis"),
+                       ("sunrise", "basis-half")):
+        basis, spectral = maps[name][kind], maps[name]["spectral"]
         if basis_version(basis) != 2:
             pytest.skip("this specmap writes basis v1 for --format basis")
         a, b = basis_emitter(basis), basis_emitter(spectral)
@@ -465,6 +469,11 @@ def test_basis_v2_from_specmap_matches_its_spectral_conversion(plugin, maps):
         peak = np.abs(want).max(1)
         lit = peak > 1e-3 * peak.max()
         rel = np.abs(got - want).max(1)[lit] / peak[lit]
+        header, _ = read_channels(basis)
+        if kind == "basis-half":
+            assert header.get("EV", 0) > 0, "the bright map's half-float v2 should need EV"
+        print(f"{name} {kind}: K = {header['specmap.basisK']}, EV = {header.get('EV', 0)}, "
+              f"relative spectral difference median {np.median(rel):.2e} max {rel.max():.2e}")
         assert rel.max() < 0.01, (name, rel.max(), np.median(rel))
 
 
