@@ -10,13 +10,15 @@ Mitsuba's own ``envmap`` reads RGB and upsamples it; this emitter reads the spec
     import specmap_envmap
     scene = specmap_envmap.load_dict({..., "sky": {"type": "specmap_envmap",
                                                    "filename": "map.spectral.exr"}})
+    image = mi.render(scene, spp=64)
 
 Parameters
 ----------
 filename : str
-    A spectral EXR from ``specmap convert`` (channels ``S0.<nm>nm``), a basis EXR from
-    ``specmap convert --format basis`` (channels ``c_R, c_G, c_B, sun``), or a basis v2 EXR
-    (``specmap.basisVersion`` = 2, channels ``k00 ... k{K-1}``). Lat-long only.
+    A spectral EXR from ``specmap convert`` (channels ``S0.<nm>nm``), a basis v2 EXR from
+    ``specmap convert --format basis`` (``specmap.basisVersion`` = 2, channels
+    ``k00 ... k{K-1}``), or a basis v1 EXR (channels ``c_R, c_G, c_B, sun``, what
+    ``--format basis`` wrote before v2). Lat-long only.
 scale : float
     Multiplies the radiance (default 1).
 to_world : transform
