@@ -62,6 +62,7 @@ gives a Python emitter no ``set_scene`` call: use :func:`load_dict` / :func:`loa
 :func:`fit_to_scene` after loading, so that shadow rays and emitted rays span the scene's
 bounding sphere (before that a sphere of radius 1e4 about the origin is assumed).
 """
+import array
 import math
 import re
 
@@ -326,7 +327,8 @@ class SpecmapEnvmap(mi.Emitter):
         self.step = float((wavelengths[-1] - wavelengths[0]) / (wavelengths.size - 1))
         self.factor = radiometric_factor()
         flat = (cube * self.factor).astype(np.float32).ravel()
-        self._data = mi.Float(flat) if _is_jit() else flat.tolist()
+        # Scalar variants index it from Python: a compact array of float32 (4 bytes a value).
+        self._data = mi.Float(flat) if _is_jit() else array.array("f", flat.tobytes())
         self._warp = mi.Hierarchical2D0(_warp_grid(_luminance(wavelengths, cube), self.rows))
         self._half_texel = 0.5 / self.width
 
