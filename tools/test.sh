@@ -33,13 +33,31 @@ if ! command -v parallel >/dev/null 2>&1; then
     exit 1
   fi
 fi
+step "LLVM for Mitsuba's llvm_ad_spectral variant (Debian package libllvm19)"
+# tests/interop/test_mitsuba.py runs the specmap_envmap emitter in llvm_ad_spectral too; Dr.Jit
+# crashes with the stock LLVM 15, so it is pointed at LLVM 19 (the test skips without one).
+if ! dpkg -s libllvm19 >/dev/null 2>&1; then
+  if [ "$(id -u)" = 0 ]; then
+    export DEBIAN_FRONTEND=noninteractive
+    apt-get install -y -qq libllvm19 >/dev/null 2>&1 \
+      || { apt-get update -qq && apt-get install -y -qq libllvm19 >/dev/null; }
+  else
+    echo "libllvm19 missing and not root: test_mitsuba.py's llvm_ad_spectral cases will skip" >&2
+  fi
+fi
+if [ -z "${DRJIT_LIBLLVM_PATH:-}" ]; then
+  for lib in /usr/lib/x86_64-linux-gnu/libLLVM.so.19* /usr/lib/*/libLLVM-19.so /usr/lib/llvm-19/lib/libLLVM.so*; do
+    if [ -e "$lib" ]; then export DRJIT_LIBLLVM_PATH="$lib"; break; fi
+  done
+fi
+echo "DRJIT_LIBLLVM_PATH=${DRJIT_LIBLLVM_PATH:-unset}"
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp/specmap-xdg-$(id -u)}"
 mkdir -p "$XDG_RUNTIME_DIR" && chmod 700 "$XDG_RUNTIME_DIR"
 # The GPU tests must run here, not skip: a missing adapter is a failure in this suite.
 export SPECMAP_REQUIRE_GPU=1
 
 step "Python venv for the interop tests (.venv)"
-if ! .venv/bin/python -c "import colour, tmm, OpenEXR, pytest, scipy" 2>/dev/null \
+if ! .venv/bin/python -c "import colour, tmm, OpenEXR, pytest, scipy, mitsuba" 2>/dev/null \
    || ! cmp -s tests/interop/requirements.txt .venv/.requirements 2>/dev/null; then
   python3 -m venv .venv
   .venv/bin/pip install --quiet --disable-pip-version-check --upgrade pip
