@@ -242,3 +242,72 @@ fn a_basis_map_converted_with_sun_spd_a_is_lit_by_an_a_sun() {
         );
     }
 }
+
+#[test]
+fn a_version_1_basis_file_is_lit_by_the_spectra_its_header_stores() {
+    use exr::meta::attribute::{AttributeValue, Text};
+    use specmap::render::LightSpectra;
+    // A 16 x 8 lat-long of version 1 (c_R, c_G, c_B, sun; the spectra in the header), written
+    // with the exr crate: made-up spectra that no light by name has.
+    let (w, h) = (16, 8);
+    let wl: Vec<f32> = (0..9).map(|i| 380.0 + 50.0 * i as f32).collect();
+    let b: Vec<Vec<f32>> = (0..4)
+        .map(|j| {
+            (0..9)
+                .map(|i| 0.1 + ((i * (j + 1)) % 5) as f32 * 0.2)
+                .collect()
+        })
+        .collect();
+    let floats = |v: &[f32]| AttributeValue::Custom {
+        kind: Text::from("floatvector"),
+        bytes: v.iter().flat_map(|x| x.to_le_bytes()).collect(),
+    };
+    let mut attrs = exr::meta::header::LayerAttributes::default();
+    let mut put = |k: &str, v: AttributeValue| {
+        attrs.other.insert(Text::from(k), v);
+    };
+    put("specmap.light", AttributeValue::Text(Text::from("D65")));
+    put("specmap.wavelengths", floats(&wl));
+    for (j, bj) in b.iter().take(3).enumerate() {
+        put(&format!("specmap.basis{j}"), floats(bj));
+    }
+    put("specmap.sunSPD", floats(&b[3]));
+    let sun_at = 2 * w + 5;
+    let mut sun = vec![0f32; w * h];
+    sun[sun_at] = 40.0;
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("v1.exr");
+    common::write_channels_with(
+        &path,
+        w,
+        h,
+        vec![
+            ("c_R", vec![0.5; w * h]),
+            ("c_G", vec![0.25; w * h]),
+            ("c_B", vec![0.125; w * h]),
+            ("sun", sun),
+        ],
+        attrs,
+    );
+    let (l, r) = env::load(&path, "FL2").unwrap();
+    assert_eq!((r.kind, r.light_used), ("basis", false));
+    let LightSpectra::Own {
+        spectra, sun_spd, ..
+    } = &l.spectra
+    else {
+        panic!("{r:?}")
+    };
+    for (j, s) in spectra.iter().take(3).chain([sun_spd]).enumerate() {
+        let want: Vec<f64> = b[j].iter().map(|&v| v as f64).collect();
+        assert_eq!(s.values(), &want[..], "spectrum {j}");
+    }
+    // The sun: the pixel's value times its solid angle, towards its direction.
+    let s = l.sun.expect("the sun channel's pixel");
+    let omega = env::solid_angle(w, h, 2);
+    assert!(
+        (s.irradiance - 40.0 * omega).abs() < 1e-5 * s.irradiance,
+        "{s:?}"
+    );
+    let d = env::direction(w, h, 5, 2);
+    assert!((0..3).map(|k| d[k] * s.direction[k]).sum::<f64>() > 1.0 - 1e-9);
+}

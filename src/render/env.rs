@@ -577,7 +577,18 @@ fn load_basis(path: &Path) -> Result<(Lighting, EnvReport)> {
     let mut s = vec![0.0; w * h];
     for i in 0..w * h {
         c_img.pixels[i] = [cr[i] * scale, cg[i] * scale, cb[i] * scale];
-        let v = (sun_ch[i] * scale) as f64;
+        // The version-1 writer stored the sun channel as given, unscaled by EV (as a mask is):
+        // a sun beyond half floats' range is infinite there, and lost.
+        let v = sun_ch[i] as f64;
+        if v.is_infinite() {
+            return Err(Error::invalid(format!(
+                "{}: pixel ({}, {}) of the sun channel overflowed half floats; convert the map \
+                 again (--format basis now writes the K-spectrum form, which scales it)",
+                path.display(),
+                i % w,
+                i / w
+            )));
+        }
         s[i] = if v.is_finite() { v.max(0.0) } else { 0.0 };
         if !c_img.pixels[i].iter().all(|v| v.is_finite()) {
             c_img.pixels[i] = [0.0; 3];

@@ -28,13 +28,24 @@ pub fn sample(name: &str) -> String {
 /// Writes a single-part scan-line EXR of f32 channels (sorted by name, as OpenEXR stores them)
 /// with the exr crate: an independent writer, which also lets a test put NaN or huge values in.
 pub fn write_channels(path: &Path, w: usize, h: usize, channels: Vec<(&str, Vec<f32>)>) {
+    write_channels_with(path, w, h, channels, LayerAttributes::default());
+}
+
+/// [`write_channels`] with the layer's attributes.
+pub fn write_channels_with(
+    path: &Path,
+    w: usize,
+    h: usize,
+    channels: Vec<(&str, Vec<f32>)>,
+    attributes: LayerAttributes,
+) {
     let list: SmallVec<[AnyChannel<FlatSamples>; 4]> = channels
         .into_iter()
         .map(|(n, v)| AnyChannel::new(n, FlatSamples::F32(v)))
         .collect();
     let layer = Layer::new(
         (w, h),
-        LayerAttributes::default(),
+        attributes,
         Encoding::FAST_LOSSLESS,
         AnyChannels::sort(list),
     );
