@@ -54,6 +54,9 @@ fn own_spectra_render_as_the_full_spectra_do_on_both_backends() {
             "forest.exr",
             ConvertOptions::faithful(),
         ),
+        // A foreign file: truth data of a room lit by a window and fluorescent tubes, whose
+        // spectra are spiky (tools/truth_mixed.py).
+        "tests/data/truth/office_mixed.spectral.exr".into(),
         // The paper's exact mode, float.
         converted(
             dir.path(),
