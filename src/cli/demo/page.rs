@@ -376,10 +376,12 @@ fn render_section(o: &mut String, run: &Run) {
     let s = &run.render_spectral;
     outln!(
         o,
-        "<p>The paper's figures 6-9 as the renderer's presets, lit by the converted map (its sun \
-         as a directional light); the chart compares D65, A and low-pressure sodium side by side \
-         under its own lights. {} wavelengths ({} nm, {} rule), Phong (Eq. 1) with thin films \
-         (Eq. 2-9). Renderer: <strong>{}</strong>.</p>",
+        "<p>The paper's figures 6-9 as the renderer's presets and the 24 ColorChecker spheres, \
+         lit by the spectra the converted map holds (projected onto its own principal \
+         components; its sun as a directional light) and seen against it; the chart compares \
+         D65, A and low-pressure sodium side by side under its own lights. {} wavelengths ({} \
+         nm, {} rule), Phong (Eq. 1) with thin films (Eq. 2-9). Renderer: <strong>{}</strong>.\
+         </p>",
         s.grid.len(),
         esc(&s.grid.to_string()),
         esc(&s.rule.to_string()),
