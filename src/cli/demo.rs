@@ -482,8 +482,8 @@ pub fn run(a: DemoArgs) -> anyhow::Result<()> {
     }
     let c = &run.converted.report;
     super::emit(&format!(
-        "wrote {}\ndemo: fitted D65 in 3 modes, converted {} (lights: {}), rendered 4 presets on \
-         {}, measured {} grids; {} files in {:.1} s. Open the page in a browser.\n",
+        "wrote {}\ndemo: fitted D65 in 3 modes, converted {} (lights: {}), rendered {} presets \
+         on {}, measured {} grids; {} files in {:.1} s. Open the page in a browser.\n",
         index.display(),
         run.env,
         if c.lights.is_empty() {
@@ -491,10 +491,11 @@ pub fn run(a: DemoArgs) -> anyhow::Result<()> {
         } else {
             c.lights
                 .iter()
-                .map(|l| format!("{:?} {}", l.kind, l.spd).to_lowercase())
+                .map(|l| format!("{} {}", format!("{:?}", l.kind).to_lowercase(), l.spd))
                 .collect::<Vec<_>>()
                 .join(", ")
         },
+        run.renders.len(),
         run.renderer,
         run.tradeoff.len(),
         files.len(),
