@@ -29,6 +29,10 @@ pub struct Cells {
     pub identity: bool,
     /// What each channel was multiplied by (the white premise).
     pub balance: [f64; 3],
+    /// Per row: the solid angle of a cell, sin and cos of its latitude; per column: sin and cos
+    /// of its longitude (the analysis asks for them per cell, many times over).
+    rows: Vec<[f64; 3]>,
+    cols: Vec<[f64; 2]>,
 }
 
 impl Cells {
@@ -63,14 +67,35 @@ impl Cells {
                 }
             })
             .collect();
+        let (w, h) = (src.image.width, src.image.height);
+        let rows = (0..h)
+            .map(|y| {
+                let t0 = PI * y as f64 / h as f64;
+                let t1 = PI * (y + 1) as f64 / h as f64;
+                let lat = -PI * ((y as f64 + 0.5) / h as f64 - 0.5);
+                [
+                    2.0 * PI / w as f64 * (t0.cos() - t1.cos()),
+                    lat.sin(),
+                    lat.cos(),
+                ]
+            })
+            .collect();
+        let cols = (0..w)
+            .map(|x| {
+                let lon = -2.0 * PI * ((x as f64 + 0.5) / w as f64 - 0.5);
+                [lon.sin(), lon.cos()]
+            })
+            .collect();
         Cells {
-            width: src.image.width,
-            height: src.image.height,
+            width: w,
+            height: h,
             rgb,
             y,
             to_xyz,
             identity,
             balance,
+            rows,
+            cols,
         }
     }
 
@@ -84,20 +109,14 @@ impl Cells {
 
     /// The solid angle of a cell (the same for every cell of a row).
     pub fn omega(&self, i: usize) -> f64 {
-        let y = i / self.width;
-        let t0 = PI * y as f64 / self.height as f64;
-        let t1 = PI * (y + 1) as f64 / self.height as f64;
-        2.0 * PI / self.width as f64 * (t0.cos() - t1.cos())
+        self.rows[i / self.width][0]
     }
 
     /// The unit direction of a cell's centre (OpenEXR's lat-long: Y up, centre column +Z).
     pub fn direction(&self, i: usize) -> [f64; 3] {
-        let (x, y) = (i % self.width, i / self.width);
-        let u = (x as f64 + 0.5) / self.width as f64;
-        let v = (y as f64 + 0.5) / self.height as f64;
-        let lat = -PI * (v - 0.5);
-        let lon = -2.0 * PI * (u - 0.5);
-        [lon.sin() * lat.cos(), lat.sin(), lon.cos() * lat.cos()]
+        let [_, sin_lat, cos_lat] = self.rows[i / self.width];
+        let [sin_lon, cos_lon] = self.cols[i % self.width];
+        [sin_lon * cos_lat, sin_lat, cos_lon * cos_lat]
     }
 
     /// The cell that holds direction `d` (unit or not).
