@@ -1421,21 +1421,24 @@ pub fn read_spectral_rows(path: &Path, mut f: impl FnMut(usize, &[f32])) -> Resu
 /// `sun` reads 0/1), if the file has it.
 pub fn read_stored_channel(path: &Path, name: &str) -> Option<Vec<f32>> {
     use exr::prelude::*;
+    // Only this channel is decoded into memory (a spectral file's bands would be 85 times as
+    // much).
     let image = read()
         .no_deep_data()
         .largest_resolution_level()
-        .all_channels()
+        .specific_channels()
+        .required(name)
+        .collect_pixels(
+            |size: Vec2<usize>, _| (size.width(), vec![0f32; size.area()]),
+            |(w, v): &mut (usize, Vec<f32>), pos: Vec2<usize>, (x,): (f32,)| {
+                v[pos.y() * *w + pos.x()] = x
+            },
+        )
         .first_valid_layer()
         .all_attributes()
         .from_file(path)
         .ok()?;
-    image
-        .layer_data
-        .channel_data
-        .list
-        .iter()
-        .find(|c| c.name == *name)
-        .map(|c| c.sample_data.values_as_f32().collect())
+    Some(image.layer_data.channel_data.pixels.1)
 }
 
 #[cfg(test)]
