@@ -156,8 +156,11 @@ pub fn write(
         "specmap.basisSun".into(),
         AttrValue::I32(sun_index.unwrap_or(-1)),
     ));
-    let ev = (precision == Precision::Half && a.peak > HALF_MAX as f64)
-        .then(|| (a.peak / HALF_MAX as f64).log2().ceil());
+    // A coefficient is at most the spectrum's norm for an orthogonal projection; the colour
+    // constraint can take it a little beyond: a stop of margin.
+    let bound = 2.0 * a.peak;
+    let ev = (precision == Precision::Half && bound > HALF_MAX as f64)
+        .then(|| (bound / HALF_MAX as f64).log2().ceil());
     let smallest = 2f64.powi(-25) * ev.unwrap_or(0.0).exp2();
     let mut writer = SpectralWriter::create(
         output,

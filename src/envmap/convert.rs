@@ -516,6 +516,13 @@ pub fn convert(
         let _ = std::fs::remove_file(&spectral_out);
         let (stats, bytes) = done?;
         plan.format = OutputFormat::Basis;
+        if stats.below_half > 0 {
+            plan.notes.push(format!(
+                "{} pixels' coefficients are all below what half floats hold after the EV \
+                 scale: written as 0 (--precision float keeps them)",
+                stats.below_half
+            ));
+        }
         (Some(stats), bytes)
     } else {
         (None, written.bytes)
@@ -540,7 +547,10 @@ pub fn convert(
             Some(b) => b.ev,
             None => precisions.ev,
         },
-        below_half: precisions.below_half,
+        below_half: match &basis {
+            Some(b) => b.below_half,
+            None => precisions.below_half,
+        },
         sanitized: read.sanitized,
         space: read.space.clone(),
         lights: analysis.scene.lights.clone(),

@@ -364,7 +364,7 @@ fn sanitize(path: &Path, img: &mut RgbImage) -> Result<()> {
 /// 1e9 cd/m^2), far below where f32 products of spectra and filters overflow (3.4e38).
 pub const MAX_RADIANCE: f64 = 1e18;
 
-fn too_bright(path: &Path, x: usize, y: usize, v: f64) -> Error {
+pub(super) fn too_bright(path: &Path, x: usize, y: usize, v: f64) -> Error {
     Error::invalid(format!(
         "{}: pixel ({x}, {y}) value {v:e} exceeds {MAX_RADIANCE:e}, beyond what the renderer's \
          f32 arithmetic carries; scale the map down (e.g. convert it with an exposure)",

@@ -10,7 +10,7 @@
 //! share for a foreign file. [`Spectra::Full`] keeps every band instead (K = N, no projection):
 //! the reference the projection is tested against.
 
-use super::env::{self, CoeffMap, EnvReport, MAX_RADIANCE};
+use super::env::{self, too_bright, CoeffMap, EnvReport, MAX_RADIANCE};
 use super::{Environment, LightSpectra, Lighting, Sun};
 use crate::colorimetry::RgbSpace;
 use crate::envmap::exrio::{self, AttrValue, EnvmapAttr};
@@ -171,14 +171,6 @@ fn layout_of(path: &Path, w: usize, h: usize, attr: Option<EnvmapAttr>) -> Resul
 fn geometry(path: &Path, layout: Layout, w: usize, h: usize) -> Result<EnvMap> {
     EnvMap::new(layout, RgbImage::new(w, h))
         .map_err(|e| Error::invalid(format!("{}: {e}", path.display())))
-}
-
-fn too_bright(path: &Path, x: usize, y: usize, v: f64) -> Error {
-    Error::invalid(format!(
-        "{}: pixel ({x}, {y}) value {v:e} exceeds {MAX_RADIANCE:e}, beyond what the renderer's \
-         f32 arithmetic carries; scale the map down (e.g. convert it with an exposure)",
-        path.display()
-    ))
 }
 
 /// The sun's pixels of a spectral file: its `sun` mask (what `convert` found), else the sun
