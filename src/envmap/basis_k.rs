@@ -17,7 +17,7 @@ use super::exrio::{
     self, AttrValue, ChannelSet, Compression, Precision, SpectralLayout, SpectralWriter, HALF_MAX,
 };
 use super::layout::{detect, EnvMap, Layout};
-use super::own_basis::{BandColour, Moments, OwnBasis, DEFAULT_DISCARD, MAX_K};
+use super::own_basis::{relative_residual, BandColour, Moments, OwnBasis, DEFAULT_DISCARD, MAX_K};
 use super::RgbImage;
 use crate::error::{Error, Result};
 use std::path::Path;
@@ -115,6 +115,34 @@ pub fn analyse(spectral: &Path) -> Result<Analysis> {
     })
 }
 
+/// The basis form's header: the spectral file's `specmap.*` attributes and the K spectra.
+fn header(spectral: &[(String, AttrValue)], a: &Analysis) -> Vec<(String, AttrValue)> {
+    let kb = a.basis.len();
+    let k = kb + a.sun.is_some() as usize;
+    let floats = |v: &[f64]| AttrValue::F32Vec(v.iter().map(|&x| x as f32).collect());
+    let mut attributes: Vec<(String, AttrValue)> = spectral
+        .iter()
+        .filter(|(n, _)| {
+            n.starts_with("specmap.")
+                && !n.starts_with("specmap.basis")
+                && n != "specmap.wavelengths"
+        })
+        .cloned()
+        .collect();
+    attributes.push(("specmap.basisVersion".into(), AttrValue::I32(2)));
+    attributes.push(("specmap.basisK".into(), AttrValue::I32(k as i32)));
+    attributes.push(("specmap.wavelengths".into(), floats(&a.wavelengths)));
+    for (j, b) in a.basis.spectra.iter().enumerate() {
+        attributes.push((format!("specmap.basis{j:02}"), floats(b)));
+    }
+    if let Some(s) = &a.sun {
+        attributes.push((format!("specmap.basis{kb:02}"), floats(s)));
+    }
+    let sun_index = if a.sun.is_some() { kb as i32 } else { -1 };
+    attributes.push(("specmap.basisSun".into(), AttrValue::I32(sun_index)));
+    attributes
+}
+
 /// Writes the basis form of `spectral` to `output` (through a temporary file beside it).
 pub fn write(
     spectral: &Path,
@@ -134,28 +162,7 @@ pub fn write(
         names.extend(["R", "G", "B"].map(String::from));
     }
     let per_out = names.len();
-    let floats = |v: &[f64]| AttrValue::F32Vec(v.iter().map(|&x| x as f32).collect());
-    let mut attributes: Vec<(String, AttrValue)> = info
-        .attributes
-        .iter()
-        .filter(|(n, _)| n.starts_with("specmap.") && !n.starts_with("specmap.basis"))
-        .cloned()
-        .collect();
-    attributes.push(("specmap.basisVersion".into(), AttrValue::I32(2)));
-    attributes.push(("specmap.basisK".into(), AttrValue::I32(k as i32)));
-    attributes.retain(|(n, _)| n != "specmap.wavelengths");
-    attributes.push(("specmap.wavelengths".into(), floats(&a.wavelengths)));
-    for (j, b) in a.basis.spectra.iter().enumerate() {
-        attributes.push((format!("specmap.basis{j:02}"), floats(b)));
-    }
-    let sun_index = a.sun.as_ref().map(|s| {
-        attributes.push((format!("specmap.basis{kb:02}"), floats(s)));
-        kb as i32
-    });
-    attributes.push((
-        "specmap.basisSun".into(),
-        AttrValue::I32(sun_index.unwrap_or(-1)),
-    ));
+    let attributes = header(&info.attributes, a);
     // A coefficient is at most the spectrum's norm for an orthogonal projection; the colour
     // constraint can take it a little beyond: a stop of margin.
     let bound = 2.0 * a.peak;
@@ -208,7 +215,7 @@ pub fn write(
                 Some(sun) if a.mask[y * w + x] => {
                     let l = a.colour.luminance(&s);
                     o[kb] = l as f32;
-                    relative(&s, |i| l * sun[i])
+                    relative_residual(&s, |i| l * sun[i])
                 }
                 _ => {
                     a.basis.project(&s, &mut c);
@@ -245,18 +252,4 @@ pub fn write(
     }
     let bytes = writer.finish()?;
     Ok((stats, bytes))
-}
-
-/// `|s - f| / |s|` (0 for a black spectrum).
-fn relative(s: &[f64], f: impl Fn(usize) -> f64) -> f64 {
-    let (mut r2, mut s2) = (0.0, 0.0);
-    for (i, v) in s.iter().enumerate() {
-        r2 += (f(i) - v).powi(2);
-        s2 += v * v;
-    }
-    if s2 > 0.0 {
-        (r2 / s2).sqrt()
-    } else {
-        0.0
-    }
 }

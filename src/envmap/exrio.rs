@@ -316,10 +316,12 @@ impl<R: ChunksReader> Decompressor<R> {
 }
 
 fn envmap_of(header: &Header) -> Option<EnvmapAttr> {
-    header
-        .own_attributes
-        .environment_map
-        .map(EnvmapAttr::from_exr)
+    envmap_attr(&header.own_attributes)
+}
+
+/// A layer's `envmap` attribute (the exr crate reads it into its own field, not `other`).
+pub fn envmap_attr(attrs: &exr::meta::header::LayerAttributes) -> Option<EnvmapAttr> {
+    attrs.environment_map.map(EnvmapAttr::from_exr)
 }
 
 fn open_exr(path: &Path) -> Result<exr::block::reader::Reader<BufReader<File>>> {

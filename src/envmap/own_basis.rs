@@ -253,18 +253,23 @@ impl OwnBasis {
 
     /// `|B c - s| / |s|` (0 for a black spectrum).
     pub fn relative_residual(&self, s: &[f64], c: &[f64]) -> f64 {
-        let mut r2 = 0.0;
-        let mut s2 = 0.0;
-        for (i, v) in s.iter().enumerate() {
-            let fit: f64 = self.spectra.iter().zip(c).map(|(b, c)| b[i] * c).sum();
-            r2 += (fit - v).powi(2);
-            s2 += v * v;
-        }
-        if s2 > 0.0 {
-            (r2 / s2).sqrt()
-        } else {
-            0.0
-        }
+        relative_residual(s, |i| {
+            self.spectra.iter().zip(c).map(|(b, c)| b[i] * c).sum()
+        })
+    }
+}
+
+/// `|fit - s| / |s|` with `fit(i)` the fitted spectrum's band `i` (0 for a black spectrum).
+pub fn relative_residual(s: &[f64], fit: impl Fn(usize) -> f64) -> f64 {
+    let (mut r2, mut s2) = (0.0, 0.0);
+    for (i, v) in s.iter().enumerate() {
+        r2 += (fit(i) - v).powi(2);
+        s2 += v * v;
+    }
+    if s2 > 0.0 {
+        (r2 / s2).sqrt()
+    } else {
+        0.0
     }
 }
 

@@ -502,7 +502,7 @@ fn text_attr(attrs: &[(String, AttrValue)], name: &str) -> Option<String> {
 /// Reads the four channels of a `basis` EXR into two RGB maps (c and s) of its layout.
 fn load_basis(path: &Path) -> Result<(Lighting, EnvReport)> {
     use exr::image::FlatSamples;
-    use exr::meta::attribute::{AttributeValue, Text};
+    use exr::meta::attribute::AttributeValue;
     use exr::prelude::read_first_flat_layer_from_file;
     let image = read_first_flat_layer_from_file(path).map_err(|e| {
         Error::invalid(format!(
@@ -559,18 +559,10 @@ fn load_basis(path: &Path) -> Result<(Lighting, EnvReport)> {
             path.display()
         )));
     }
-    let envmap = image
-        .attributes
-        .other
-        .get(&Text::from("envmap"))
-        .or_else(|| layer.attributes.other.get(&Text::from("envmap")))
-        .and_then(|v| match v {
-            AttributeValue::EnvironmentMap(exr::meta::attribute::EnvironmentMap::Cube) => {
-                Some(Layout::Cube)
-            }
-            AttributeValue::EnvironmentMap(_) => Some(Layout::LatLong),
-            _ => None,
-        });
+    let envmap = exrio::envmap_attr(&layer.attributes).map(|a| match a {
+        EnvmapAttr::LatLong => Layout::LatLong,
+        EnvmapAttr::Cube => Layout::Cube,
+    });
     let layout =
         detect(w, h, envmap).map_err(|e| Error::invalid(format!("{}: {e}", path.display())))?;
     let mut c_img = RgbImage::new(w, h);

@@ -524,16 +524,7 @@ pub fn load_basis_k(path: &Path) -> Result<(Lighting, EnvReport)> {
     let coef: Vec<Vec<f32>> = (0..k)
         .map(|j| channel(&format!("k{j:02}")))
         .collect::<Result<_>>()?;
-    let envmap = [&layer.attributes.other, &image.attributes.other]
-        .iter()
-        .find_map(|a| a.get(&exr::meta::attribute::Text::from("envmap")))
-        .and_then(|v| match v {
-            exr::meta::attribute::AttributeValue::EnvironmentMap(
-                exr::meta::attribute::EnvironmentMap::Cube,
-            ) => Some(EnvmapAttr::Cube),
-            exr::meta::attribute::AttributeValue::EnvironmentMap(_) => Some(EnvmapAttr::LatLong),
-            _ => None,
-        });
+    let envmap = exrio::envmap_attr(&layer.attributes);
     let geo = geometry(path, layout_of(path, w, h, envmap)?, w, h)?;
     let mut texels = TexelPair::new(geo.used_pixels(), k);
     let mut sun = SunSum {
