@@ -28,7 +28,7 @@ TRUTH = ROOT / "tests" / "data" / "truth"
 RIGHT = {"interior_fl2": "FL2", "interior_fl11": "FL11", "street_hps": "hps",
          # The scenes of several lights: the light of the most energy (the tubes, the sodium
          # lamps, the bulbs as A), or daylight.
-         "office_mixed": "FL11", "street_mixed": "hps", "room_incandescent_dusk": "A",
+         "office_mixed": "FL11", "office_warm_tubes": "FL11", "street_mixed": "hps", "room_incandescent_dusk": "A",
          "yard_overcast": "D65"}
 # paper/exact/nonneg keep the paper's sun (D65), sky (the light's basis) and, with a named light,
 # its white premise (RGB (1,1,1) is the main light), so these are the methods as they were.

@@ -8,6 +8,9 @@ Small numpy ray casters in the style of make_truth.py's interior and street, eac
   tubes (4100 K, a measured lamp the converter does not match against; luminance 3000) on the
   ceiling towards +x: the walls by the window are lit mostly by daylight, those under the tubes
   mostly by them;
+- `office_warm_tubes`: the same office with 3500 K f32t8-tl835 tubes and a 6000 K window (the
+  tubes' white is the halophosphate FL3's, within a just noticeable difference, and no
+  triphosphor table's);
 - `street_mixed`: make_truth.py's street with six c100s54 high-pressure sodium lamps (a
   measured 100 W lamp, not the converter's `hps`) and one luxeon-ww-2880 warm-white LED lamp
   under a dim blue-hour sky (CIE daylight 9000 K at 2% of the road's luminance);
@@ -151,19 +154,35 @@ def room(wl, lo, hi, eye, rects, bulbs, **materials):
     return average_pixels(radiance)
 
 
-def office_mixed():
+def office(tube_name, window_k):
+    """A 6 x 3 x 5 m office: a window of daylight `window_k` on its -x wall, two strips of
+    `tube_name` tubes on the ceiling towards +x."""
     wl = grid(780.0)
     lo, hi = np.array([-3.0, 0.0, -2.5]), np.array([3.0, 3.0, 2.5])
     window = ([-3.0, 1.65, 0.0], [0.0, 0.75, 0.0], [0.0, 0.0, 1.5], [1.0, 0.0, 0.0],
-              daylight(7000.0, wl) * 1500.0)
-    tube = lamp("f32t8-tl841", wl) * 3000.0
+              daylight(window_k, wl) * 1500.0)
+    tube = lamp(tube_name, wl) * 3000.0
     tubes = [([x, 3.0, 0.0], [0.1, 0.0, 0.0], [0.0, 0.0, 1.5], [0.0, -1.0, 0.0], tube)
              for x in (0.5, 2.0)]
-    radiance = room(wl, lo, hi, np.array([0.5, 1.5, 0.3]), [window] + tubes, [])
+    return wl, room(wl, lo, hi, np.array([0.5, 1.5, 0.3]), [window] + tubes, [])
+
+
+def office_mixed():
+    wl, radiance = office("f32t8-tl841", 7000.0)
     return wl, radiance, {
         "kind": "office with an overcast window (daylight 7000 K) and f32t8-tl841 tubes",
         "lights": "window: daylight 7000 K; ceiling: f32t8-tl841 x 2",
         "right_light": "daylight for the window, fluorescent (triphosphor 4100 K) for the tubes"}
+
+
+def office_warm_tubes():
+    """office_mixed with 3500 K tubes (f32t8-tl835) and a 6000 K window: a tube whose white is a
+    legacy halophosphate table's (FL3) and no triphosphor table's."""
+    wl, radiance = office("f32t8-tl835", 6000.0)
+    return wl, radiance, {
+        "kind": "office with a daylight window (6000 K) and f32t8-tl835 tubes",
+        "lights": "window: daylight 6000 K; ceiling: f32t8-tl835 x 2",
+        "right_light": "daylight for the window, fluorescent (triphosphor 3500 K) for the tubes"}
 
 
 def room_incandescent_dusk():
@@ -248,6 +267,7 @@ def yard_overcast():
 
 SCENES = {
     "office_mixed": office_mixed,
+    "office_warm_tubes": office_warm_tubes,
     "street_mixed": street_mixed,
     "room_incandescent_dusk": room_incandescent_dusk,
     "yard_overcast": yard_overcast,

@@ -672,11 +672,11 @@ fn lamp_or_reflector(
              brighter than the sky: a sunlit surface or a reflection"
         )));
     }
-    if ctx.daylight && !named && m.distance_uv > LAMP_MATCH_UV && !outshines {
+    if ctx.daylight && !named && m.nearest_uv > LAMP_MATCH_UV && !outshines {
         return Ok(Err(format!(
-            "{what} matches no lamp (nearest {} at {:.4} uv) and is not {DAYLIGHT_LAMP_CONTRAST:.0} \
-             times brighter than the sky: a sunlit or daylit surface",
-            m.spd, m.distance_uv
+            "{what} matches no lamp (nearest white at {:.4} uv) and is not \
+             {DAYLIGHT_LAMP_CONTRAST:.0} times brighter than the sky: a sunlit or daylit surface",
+            m.nearest_uv
         )));
     }
     Ok(Ok(m))

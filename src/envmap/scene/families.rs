@@ -108,6 +108,10 @@ pub const SAME_WHITE_UV: f64 = 0.0015;
 /// Matches within this uv distance of the nearest are alternatives the shape can choose among.
 pub const AMBIGUITY_UV: f64 = 0.003;
 
+/// How far (CIE 1960 uv) a strip's white may lie from a triphosphor table's for that table to
+/// be taken over a halophosphate one ([`triphosphor_instead`]): about 1000 K at 3500 K.
+pub const TRIPHOSPHOR_REACH_UV: f64 = 0.02;
+
 /// A region this elongated (long axis over short) is a tube or a strip.
 pub const STRIP_ELONGATION: f64 = 3.0;
 
@@ -165,6 +169,9 @@ pub struct LampMatch {
     pub family: Family,
     /// Distance in CIE 1960 uv from the lamp's colour to the matched white.
     pub distance_uv: f64,
+    /// Distance in CIE 1960 uv to the nearest white of the catalogue (the matched one or
+    /// another): how well the lamp's colour is explained at all.
+    pub nearest_uv: f64,
     /// Why this match among the near ones.
     pub why: String,
     /// Other matches within [`AMBIGUITY_UV`] of the nearest: (spd, distance).
@@ -259,10 +266,15 @@ pub fn match_lamp(uv: [f64; 2], cct_k: Option<f64>, elongation: f64) -> Result<L
             })
             .unwrap_or((near[0], "the nearest white"))
     };
+    let (chosen, why) = match triphosphor_instead(&found, chosen, strip) {
+        Some(t) => (t, TRIPHOSPHOR_WHY),
+        None => (chosen, why),
+    };
     Ok(LampMatch {
         spd: chosen.0.clone(),
         family: chosen.1,
         distance_uv: chosen.3,
+        nearest_uv: best,
         why: why.to_string(),
         alternatives: near
             .iter()
@@ -270,6 +282,25 @@ pub fn match_lamp(uv: [f64; 2], cct_k: Option<f64>, elongation: f64) -> Result<L
             .map(|f| (f.0.clone(), f.3))
             .collect(),
     })
+}
+
+/// Why a strip took a triphosphor table over a halophosphate one of its white.
+const TRIPHOSPHOR_WHY: &str = "a strip: a triphosphor tube (today's usual one) of the nearest \
+    white, rather than a legacy halophosphate table of its own";
+
+/// A strip matched to a legacy or less common fluorescent table (rank above 0): the nearest
+/// triphosphor table (rank 0) within [`TRIPHOSPHOR_REACH_UV`] instead. Measured
+/// (`tools/lamp_rendition.py`): modern tubes of 2900-4100 K (f32t8-tl830/835/841, t8-polylux,
+/// tl84) render the ColorChecker 0.1-0.8 CIEDE2000 from a triphosphor table shifted to their
+/// white, and 2.1-3.5 from FL2 or FL3 even where those share their white.
+fn triphosphor_instead<'a>(found: &'a [Near], chosen: &'a Near, strip: bool) -> Option<&'a Near> {
+    if !strip || chosen.1 != Family::Fluorescent || chosen.2 == 0 {
+        return None;
+    }
+    found
+        .iter()
+        .filter(|f| f.1 == Family::Fluorescent && f.2 == 0 && f.3 <= TRIPHOSPHOR_REACH_UV)
+        .min_by(|a, b| a.3.total_cmp(&b.3))
 }
 
 #[cfg(test)]
@@ -304,6 +335,13 @@ mod tests {
         assert_eq!(spot.spd, "Planckian 3000 K");
         let tube = match_lamp(uv, Some(3000.0), 8.0).unwrap();
         assert_eq!(tube.spd, "FL12", "{tube:?}");
+        // A tube of the halophosphate FL3's white (3450 K) is a triphosphor tube all the same,
+        // the nearest one; a compact source of that white stays FL3 or another near twin.
+        let uv = uv_of("FL3");
+        let tube = match_lamp(uv, Some(3450.0), 8.0).unwrap();
+        assert_eq!(tube.spd, "FL11", "{tube:?}");
+        assert!(tube.distance_uv > tube.nearest_uv && tube.nearest_uv < 1e-9);
+        assert_ne!(match_lamp(uv, Some(3450.0), 1.0).unwrap().spd, "FL11");
         // A 4000 K tube is triphosphor, a 4000 K spot an LED (LED-B3's white is within a just
         // noticeable difference of FL11's), a 2000 K white sodium.
         let uv = uv_of("FL11");

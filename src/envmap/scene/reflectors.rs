@@ -14,6 +14,7 @@
 
 use super::cells::Cells;
 use super::{Light, REFLECTOR};
+use crate::colorimetry::Xyz;
 use nalgebra::Vector3;
 
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
@@ -34,11 +35,15 @@ impl Default for ReflectorModel {
 
 pub const LOCAL_SIGMA_DEG: f64 = 20.0;
 /// The default pull towards the global mix, chosen by measurement on the truth scenes
-/// (docs/conversion.md): 0.02 lets the saturated patches of a street's shop fronts pull their
-/// walls' carrier towards the one LED lamp (mean rendition 0.58 there), 0.5 keeps the street at
-/// 0.39 and still lets the walls of a mixed office follow their window or their tubes (0.65,
-/// against 0.67 with one global mix).
-pub const LOCAL_PRIOR: f64 = 0.5;
+/// (docs/scenes.md): with the grey world read from the surfaces that could be grey
+/// ([`NEUTRAL_UV`]), 0.1 lets the walls of a mixed office follow their window or their tubes
+/// (mean rendition 0.57, against 0.65 at 0.5 and 0.52 at 0) and keeps a street of sodium lamps
+/// and one LED at 0.41 (0.53 at 0: with no pull the shop fronts lit by the LED pull the walls
+/// around them towards it).
+pub const LOCAL_PRIOR: f64 = 0.1;
+/// The CIE 1960 uv distance from the lights' whites at which a reflector counts half in its
+/// neighbourhood's grey world ([`neutral_weight`]).
+pub const NEUTRAL_UV: f64 = 0.003;
 pub const GRID_WIDTH: usize = 64;
 
 /// A distinct light spectrum that reflectors can be lit by.
@@ -169,13 +174,18 @@ fn local_mixes(
         );
         Vector3::new(lon.sin() * lat.cos(), lat.sin(), lon.cos() * lat.cos())
     };
-    // Reflectors' XYZ x solid angle, gathered into the coarse cells.
+    let whites: Vec<[f64; 2]> = carriers
+        .iter()
+        .map(|c| Xyz::new(c.xyz[0], c.xyz[1], c.xyz[2]).uv1960())
+        .collect();
+    // Reflectors' XYZ x solid angle x neutrality, gathered into the coarse cells.
     let mut sums = vec![Vector3::<f64>::zeros(); coarse];
     for (i, &l) in label.iter().enumerate() {
         if l == REFLECTOR {
             let d = cells.direction(i);
             let c = coarse_cell(d, grid_height);
-            sums[c] += cells.xyz(i) * cells.omega(i);
+            let xyz = cells.xyz(i);
+            sums[c] += xyz * cells.omega(i) * neutral_weight(&whites, &xyz);
         }
     }
     let dirs: Vec<Vector3<f64>> = (0..coarse).map(coarse_dir).collect();
@@ -198,6 +208,37 @@ fn local_mixes(
             m.iter().map(|&v| v as f32).collect()
         })
         .collect()
+}
+
+/// How much a reflector counts in its neighbourhood's grey world: 1 for a colour some mix of the
+/// lights' whites can make, falling off as `1 / (1 + (d / NEUTRAL_UV)^2)` with its CIE 1960 uv
+/// distance `d` from the nearest such mix (the segments between the whites). A saturated
+/// surface says more about itself than about its light (an orange shop front under a white lamp
+/// is not orange light), so the mix is read mostly from the surfaces that could be grey.
+fn neutral_weight(whites: &[[f64; 2]], xyz: &Vector3<f64>) -> f64 {
+    if xyz.sum().is_nan() || xyz.sum() <= 0.0 || whites.is_empty() {
+        return 1.0;
+    }
+    let p = Xyz::new(xyz[0], xyz[1], xyz[2]).uv1960();
+    let mut d = f64::INFINITY;
+    for (a, u) in whites.iter().enumerate() {
+        for v in &whites[a..] {
+            d = d.min(segment_distance(p, *u, *v));
+        }
+    }
+    1.0 / (1.0 + (d / NEUTRAL_UV).powi(2))
+}
+
+/// The distance from `p` to the segment `u`-`v` (a point when they coincide).
+fn segment_distance(p: [f64; 2], u: [f64; 2], v: [f64; 2]) -> f64 {
+    let e = [v[0] - u[0], v[1] - u[1]];
+    let l2 = e[0] * e[0] + e[1] * e[1];
+    let t = if l2 > 0.0 {
+        (((p[0] - u[0]) * e[0] + (p[1] - u[1]) * e[1]) / l2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (p[0] - u[0] - t * e[0]).hypot(p[1] - u[1] - t * e[1])
 }
 
 fn coarse_cell(d: [f64; 3], grid_height: usize) -> usize {
@@ -274,6 +315,32 @@ mod tests {
         assert!((p.iter().sum::<f64>() - 1.0).abs() < 1e-12);
         assert!(p.iter().all(|&v| v >= 0.0));
         assert_eq!(project_simplex(&[0.3, 0.7]), vec![0.3, 0.7]);
+    }
+
+    #[test]
+    fn a_surface_counts_in_the_grey_world_as_far_as_it_could_be_grey() {
+        let whites = [[0.1978, 0.3122], [0.2560, 0.3495]]; // D65 and A, CIE 1960 uv
+        let at = |uv: [f64; 2]| {
+            // XYZ of CIE 1960 uv at Y = 1: x = 3u / (2u - 8v + 4), y = 2v / (2u - 8v + 4).
+            let d = 2.0 * uv[0] - 8.0 * uv[1] + 4.0;
+            let (x, y) = (3.0 * uv[0] / d, 2.0 * uv[1] / d);
+            neutral_weight(&whites, &Vector3::new(x / y, 1.0, (1.0 - x - y) / y))
+        };
+        // On either white, and half way between them (a mix of the two lights): grey.
+        assert!((at(whites[0]) - 1.0).abs() < 1e-9);
+        assert!((at([0.2269, 0.33085]) - 1.0).abs() < 1e-9);
+        // NEUTRAL_UV off the segment counts half; five times as far, 1/26.
+        let (ex, ey) = (whites[1][0] - whites[0][0], whites[1][1] - whites[0][1]);
+        let len = ex.hypot(ey);
+        let off = |k: f64| [0.2269 - ey / len * k, 0.33085 + ex / len * k];
+        assert!(
+            (at(off(NEUTRAL_UV)) - 0.5).abs() < 1e-3,
+            "{}",
+            at(off(NEUTRAL_UV))
+        );
+        assert!((at(off(5.0 * NEUTRAL_UV)) - 1.0 / 26.0).abs() < 1e-3);
+        // Beyond the segment's end the distance is to the end point.
+        assert!((at([whites[1][0] + NEUTRAL_UV, whites[1][1]]) - 0.5).abs() < 1e-3);
     }
 
     #[test]
