@@ -204,8 +204,7 @@ fn lambertian_sphere_in_uniform_light_is_albedo_times_light() {
             for (name, img, tol) in images {
                 for y in 0..31 {
                     for x in 0..31 {
-                        let [wx, wy] = cpu::pixel_position(&p, x, y);
-                        let inside = cpu::hit(&p.objects, wx, wy).is_some();
+                        let inside = cpu::hit_pixel(&p, x, y).is_some();
                         let k = if inside { albedo + ks } else { 1.0 };
                         let got = px(&img, x, y);
                         for c in 0..3 {
@@ -283,12 +282,7 @@ fn chart_patches_have_the_colours_of_specmap_color() {
         let v = p.params.view.map(|c| c as f64);
         let x = ((center[0] - v[0]) / v[2] + 384.0).floor() as usize;
         let y = ((v[1] - center[1]) / v[2] + 256.0).floor() as usize;
-        let (hit, _) = cpu::hit(
-            &p.objects,
-            cpu::pixel_position(&p, x, y)[0],
-            cpu::pixel_position(&p, x, y)[1],
-        )
-        .unwrap();
+        let (hit, _) = cpu::hit_pixel(&p, x, y).unwrap();
         assert_eq!(hit, i);
         let one = single_pixel(&p, x, y);
         let de = delta_e_2000(lab_of(want), lab_of(one));
@@ -309,6 +303,8 @@ fn single_pixel(p: &Prepared, x: usize, y: usize) -> [f64; 3] {
     q.params.height = 1;
     q.params.view[0] = wx as f32;
     q.params.view[1] = wy as f32;
+    // The frame changed: so did which objects its one row can hit.
+    q.rows = specmap::render::rows::index(&q.objects, &q.params);
     px(&cpu::render(&q), 0, 0)
 }
 

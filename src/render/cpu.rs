@@ -37,11 +37,24 @@ pub fn pixel_position(p: &Prepared, x: usize, y: usize) -> [f64; 2] {
     ]
 }
 
-/// The nearest hit along the ray down −Z through (px, py): object index, normal.
-pub fn hit(objects: &[GpuObject], px: f64, py: f64) -> Option<(usize, [f64; 3])> {
+/// The nearest hit through pixel (x, y)'s centre, among the objects its row can hit.
+pub fn hit_pixel(p: &Prepared, x: usize, y: usize) -> Option<(usize, [f64; 3])> {
+    let [px, py] = pixel_position(p, x, y);
+    hit(&p.objects, super::rows::row(&p.rows, y), px, py)
+}
+
+/// The nearest hit along the ray down −Z through (px, py) among the objects `candidates`
+/// (indices into `objects`, in order): object index, normal.
+pub fn hit(
+    objects: &[GpuObject],
+    candidates: &[u32],
+    px: f64,
+    py: f64,
+) -> Option<(usize, [f64; 3])> {
     let mut best: Option<(usize, [f64; 3])> = None;
     let mut best_z = f64::NEG_INFINITY;
-    for (i, o) in objects.iter().enumerate() {
+    for &k in candidates {
+        let (i, o) = (k as usize, &objects[k as usize]);
         let p0 = o.p0.map(|v| v as f64);
         let p1 = o.p1.map(|v| v as f64);
         let found = match o.kind {
@@ -149,8 +162,8 @@ fn pixel(p: &Prepared, x: usize, y: usize) -> [f32; 3] {
             *v += p.spectra[cmf + c * n_wl + i] as f64 * l;
         }
     };
-    let [px, py] = pixel_position(p, x, y);
-    match hit(&p.objects, px, py) {
+    let px = pixel_position(p, x, y)[0];
+    match hit_pixel(p, x, y) {
         None if p.params.flags & HIDE_BACKGROUND != 0 => {}
         None => {
             let lt = &p.lightings[p.params.background as usize];

@@ -75,7 +75,8 @@ impl Gpu {
         let info = adapter.get_info();
         let alimits = adapter.limits();
         let mut limits = wgpu::Limits::downlevel_defaults();
-        limits.max_storage_buffers_per_shader_stage = 7;
+        // Seven read-only buffers and the output (WebGPU's default limit).
+        limits.max_storage_buffers_per_shader_stage = 8;
         limits.max_storage_buffer_binding_size = alimits.max_storage_buffer_binding_size;
         limits.max_buffer_size = alimits.max_buffer_size;
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
@@ -210,6 +211,7 @@ impl Gpu {
         let lightings = self.storage("lightings", bytemuck::cast_slice(&p.lightings))?;
         let maps = self.storage("maps", bytemuck::cast_slice(&p.maps))?;
         let texels = self.storage("texels", bytemuck::cast_slice(&p.texels))?;
+        let rows = self.storage("rows", bytemuck::cast_slice(&p.rows))?;
         let out = self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("out"),
             size: out_bytes,
@@ -224,7 +226,7 @@ impl Gpu {
         });
         let layout = self.pipeline.get_bind_group_layout(0);
         let entries: Vec<wgpu::BindGroupEntry> = [
-            &params, &spectra, &objects, &materials, &lightings, &maps, &texels, &out,
+            &params, &spectra, &objects, &materials, &lightings, &maps, &texels, &out, &rows,
         ]
         .iter()
         .enumerate()

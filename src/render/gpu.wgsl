@@ -59,6 +59,8 @@ struct Lighting {
 @group(0) @binding(5) var<storage, read> maps: array<vec4<u32>>;
 @group(0) @binding(6) var<storage, read> texels: array<vec4<f32>>;
 @group(0) @binding(7) var<storage, read_write> out_rgb: array<vec4<f32>>;
+// Per pixel row, the objects it can hit (rows.rs): height + 1 offsets, then object indices.
+@group(0) @binding(8) var<storage, read> rows: array<u32>;
 
 const PI: f32 = 3.14159265358979;
 const TWO_PI: f32 = 6.28318530717959;
@@ -322,7 +324,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     var best = -1;
     var best_z = -3.4e38;
     var n = vec3<f32>(0.0, 0.0, 1.0);
-    for (var k = 0u; k < params.n_objects; k = k + 1u) {
+    for (var r = rows[y]; r < rows[y + 1u]; r = r + 1u) {
+        let k = rows[r];
         let o = objects[k];
         var found = false;
         var z = 0.0;

@@ -43,6 +43,7 @@ pub mod image;
 pub mod own;
 pub mod prepare;
 pub mod presets;
+pub mod rows;
 pub mod stimuli;
 pub mod sweep;
 

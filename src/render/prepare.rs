@@ -117,6 +117,8 @@ pub struct Prepared {
     /// [offset in texels, width, height, 0].
     pub maps: Vec<[u32; 4]>,
     pub texels: Vec<[f32; 4]>,
+    /// Per pixel row, the objects it can hit ([`super::rows`]).
+    pub rows: Vec<u32>,
     pub wavelengths_nm: Vec<f64>,
     /// Per material (CPU only).
     pub films: Vec<Option<CpuFilm>>,
@@ -451,6 +453,7 @@ impl Prepared {
             ],
             rgb: [row(0), row(1), row(2)],
         };
+        let rows = super::rows::index(&objects, &params);
         Ok(Prepared {
             params,
             spectra,
@@ -459,6 +462,7 @@ impl Prepared {
             lightings,
             maps,
             texels,
+            rows,
             wavelengths_nm,
             films,
         })
