@@ -209,6 +209,7 @@ pub fn fit(train: &Estimator, held_out: Option<&Estimator>, opts: &Options) -> R
     })?;
     if best.max() <= target {
         best = prune(&p, held_out, best, target, &line_nodes)?;
+        best = reseed(&p, held_out, best, target, &line_nodes)?;
     }
     let mut choice = best.into_choice(train, held_out, opts, &line_nodes);
     choice.tried = tried;
@@ -460,6 +461,130 @@ fn prune(
             }
         }
         break;
+    }
+    Ok(best)
+}
+
+/// Where the reseeding stage spreads its seeds: every span from a first node in
+/// `SEED_FIRST_NM` to a last in `SEED_LAST_NM` (steps of 10 and 20 nm).
+const SEED_FIRST_NM: (usize, usize, usize) = (400, 460, 10);
+const SEED_LAST_NM: (usize, usize, usize) = (600, 720, 20);
+
+/// Seeds judged by [`exchange`] at each node count.
+const SEEDS_EXCHANGED: usize = 2;
+
+/// How far (nm) and in what steps an exchange moves a node.
+const EXCHANGE_REACH_NM: usize = 40;
+const EXCHANGE_STEP_NM: usize = 2;
+
+/// After pruning: one node fewer, from fresh starts. Greedy nodes and their pruning keep the
+/// shape of the sets they grew from; a smooth scene is often better served by nodes spread
+/// evenly over the span the observer sees. Per node count, the seeds are the lines plus the
+/// other nodes spread evenly over each span of [`SEED_FIRST_NM`] x [`SEED_LAST_NM`]; the
+/// [`SEEDS_EXCHANGED`] best are improved by [`exchange`], and the best that meets the target
+/// is kept, until none does.
+fn reseed(
+    p: &Problem,
+    held_out: Option<&Estimator>,
+    mut best: Candidate,
+    target: f64,
+    fixed: &[usize],
+) -> Result<Candidate> {
+    let start_nm = p.est.grid.wavelength_nm(0).round() as usize;
+    let len = p.est.grid.len();
+    while best.cols.len() > fixed.len() + 2 {
+        let free = best.cols.len() - 1 - fixed.len();
+        let mut seeds: Vec<Vec<usize>> = Vec::new();
+        for a in (SEED_FIRST_NM.0..=SEED_FIRST_NM.1).step_by(SEED_FIRST_NM.2) {
+            for b in (SEED_LAST_NM.0..=SEED_LAST_NM.1).step_by(SEED_LAST_NM.2) {
+                let mut c: Vec<usize> = fixed.to_vec();
+                for i in 0..free {
+                    let nm = a + (b - a) * i / (free - 1).max(1);
+                    let j = nm.saturating_sub(start_nm).min(len - 1);
+                    if !c.contains(&j) {
+                        c.push(j);
+                    }
+                }
+                c.sort_unstable();
+                if c.len() == best.cols.len() - 1 && !seeds.contains(&c) {
+                    seeds.push(c);
+                }
+            }
+        }
+        let mut judged: Vec<Candidate> = seeds
+            .par_iter()
+            .map(|c| Candidate::new(p, held_out, c, None))
+            .collect::<Result<Vec<_>>>()?
+            .into_iter()
+            .flatten()
+            .collect();
+        judged.sort_by(|a, b| a.max().total_cmp(&b.max()));
+        let mut found: Option<Candidate> = None;
+        for seed in judged.into_iter().take(SEEDS_EXCHANGED) {
+            let c = exchange(p, held_out, seed, fixed)?;
+            if c.max() <= target && found.as_ref().is_none_or(|f| c.max() < f.max()) {
+                found = Some(c);
+            }
+        }
+        match found {
+            Some(c) => best = c,
+            None => break,
+        }
+    }
+    Ok(best)
+}
+
+/// Moves each node (not the lines) to the wavelength within [`EXCHANGE_REACH_NM`] that gives
+/// the smallest largest error with the candidate's Lawson row weights held (a weighted least
+/// squares per move); the three best moves are judged by their own minimax weights, and the
+/// best is taken if it lowers the largest error. Rounds go on while one does.
+fn exchange(
+    p: &Problem,
+    held_out: Option<&Estimator>,
+    mut best: Candidate,
+    fixed: &[usize],
+) -> Result<Candidate> {
+    let len = p.est.grid.len();
+    for _ in 0..6 {
+        let mut improved = false;
+        for i in 0..best.cols.len() {
+            let at = best.cols[i];
+            if fixed.contains(&at) {
+                continue;
+            }
+            let lo = at.saturating_sub(EXCHANGE_REACH_NM);
+            let hi = (at + EXCHANGE_REACH_NM).min(len - 1);
+            let mut moves: Vec<(Vec<usize>, f64)> = (lo..=hi)
+                .step_by(EXCHANGE_STEP_NM)
+                .filter(|j| !best.cols.contains(j))
+                .collect::<Vec<_>>()
+                .into_par_iter()
+                .filter_map(|j| {
+                    let mut c = best.cols.clone();
+                    c[i] = j;
+                    c.sort_unstable();
+                    let w = p.solve_weighted(&c, &best.rows)?;
+                    let e = worst(&p.errors(&c, &w)).1;
+                    Some((c, e))
+                })
+                .collect();
+            moves.sort_by(|a, b| a.1.total_cmp(&b.1));
+            moves.truncate(3);
+            let judged = moves
+                .par_iter()
+                .map(|(c, _)| Candidate::new(p, held_out, c, Some(&best)))
+                .collect::<Result<Vec<_>>>()?
+                .into_iter()
+                .flatten()
+                .min_by(|a, b| a.max().total_cmp(&b.max()));
+            if let Some(c) = judged.filter(|c| c.max() < 0.999 * best.max()) {
+                best = c;
+                improved = true;
+            }
+        }
+        if !improved {
+            break;
+        }
     }
     Ok(best)
 }

@@ -104,7 +104,7 @@ impl<'a> Problem<'a> {
     }
 
     /// Least squares for `cols` with row weights `u` on the stimuli (whites: their mean).
-    fn solve_weighted(&self, cols: &[usize], u: &[f64]) -> Option<Weights> {
+    pub(crate) fn solve_weighted(&self, cols: &[usize], u: &[f64]) -> Option<Weights> {
         let mean = u.iter().sum::<f64>() / u.len().max(1) as f64;
         let root: Vec<f64> = (0..self.rows.len())
             .map(|r| if r < self.stimuli { u[r] } else { mean }.sqrt())
