@@ -394,7 +394,7 @@ fn polish(
             if fixed.contains(&best.cols[i]) {
                 continue;
             }
-            let mut tries: Vec<(Vec<usize>, f64)> = MOVES_NM
+            let tries: Vec<(Vec<usize>, f64)> = MOVES_NM
                 .par_iter()
                 .filter_map(|&d| {
                     let j = best.cols[i] as isize + d;
@@ -408,15 +408,7 @@ fn polish(
                     Some((c, r))
                 })
                 .collect();
-            tries.sort_by(|a, b| a.1.total_cmp(&b.1));
-            tries.truncate(2);
-            let found = tries
-                .par_iter()
-                .map(|(c, _)| Candidate::new(p, held_out, c, Some(&best)))
-                .collect::<Result<Vec<_>>>()?
-                .into_iter()
-                .flatten()
-                .min_by(|a, b| a.max().total_cmp(&b.max()));
+            let found = judge_best(p, held_out, tries, 2, &best)?;
             if let Some(c) = found.filter(|c| c.max() < best.max()) {
                 best = c;
                 improved = true;
@@ -427,6 +419,26 @@ fn polish(
         }
     }
     Ok(best)
+}
+
+/// Of node sets ranked by a cheap score (lower first), the `keep` best judged by their own
+/// minimax weights (Lawson started from `start`'s): the one with the smallest largest error.
+fn judge_best(
+    p: &Problem,
+    held_out: Option<&Estimator>,
+    mut ranked: Vec<(Vec<usize>, f64)>,
+    keep: usize,
+    start: &Candidate,
+) -> Result<Option<Candidate>> {
+    ranked.sort_by(|a, b| a.1.total_cmp(&b.1));
+    ranked.truncate(keep);
+    Ok(ranked
+        .par_iter()
+        .map(|(c, _)| Candidate::new(p, held_out, c, Some(start)))
+        .collect::<Result<Vec<_>>>()?
+        .into_iter()
+        .flatten()
+        .min_by(|a, b| a.max().total_cmp(&b.max())))
 }
 
 /// Drops nodes while the target stays met: each round tries every removal (minimax weights
@@ -554,7 +566,7 @@ fn exchange(
             }
             let lo = at.saturating_sub(EXCHANGE_REACH_NM);
             let hi = (at + EXCHANGE_REACH_NM).min(len - 1);
-            let mut moves: Vec<(Vec<usize>, f64)> = (lo..=hi)
+            let moves: Vec<(Vec<usize>, f64)> = (lo..=hi)
                 .step_by(EXCHANGE_STEP_NM)
                 .filter(|j| !best.cols.contains(j))
                 .collect::<Vec<_>>()
@@ -568,15 +580,7 @@ fn exchange(
                     Some((c, e))
                 })
                 .collect();
-            moves.sort_by(|a, b| a.1.total_cmp(&b.1));
-            moves.truncate(3);
-            let judged = moves
-                .par_iter()
-                .map(|(c, _)| Candidate::new(p, held_out, c, Some(&best)))
-                .collect::<Result<Vec<_>>>()?
-                .into_iter()
-                .flatten()
-                .min_by(|a, b| a.max().total_cmp(&b.max()));
+            let judged = judge_best(p, held_out, moves, 3, &best)?;
             if let Some(c) = judged.filter(|c| c.max() < 0.999 * best.max()) {
                 best = c;
                 improved = true;
