@@ -441,6 +441,24 @@ fn judge_best(
         .min_by(|a, b| a.max().total_cmp(&b.max())))
 }
 
+/// Node sets with their minimax weights from scratch, the smallest largest error first (sets
+/// that cannot be solved left out).
+fn judge_all(
+    p: &Problem,
+    held_out: Option<&Estimator>,
+    sets: Vec<Vec<usize>>,
+) -> Result<Vec<Candidate>> {
+    let mut judged: Vec<Candidate> = sets
+        .par_iter()
+        .map(|c| Candidate::new(p, held_out, c, None))
+        .collect::<Result<Vec<_>>>()?
+        .into_iter()
+        .flatten()
+        .collect();
+    judged.sort_by(|a, b| a.max().total_cmp(&b.max()));
+    Ok(judged)
+}
+
 /// Drops nodes while the target stays met: each round tries every removal (minimax weights
 /// from scratch), moves the nodes of the two best into place, and keeps the first that meets
 /// the target.
@@ -452,18 +470,17 @@ fn prune(
     fixed: &[usize],
 ) -> Result<Candidate> {
     'rounds: while best.cols.len() > 1 {
-        let mut removals: Vec<Candidate> = (0..best.cols.len())
-            .into_par_iter()
-            .map(|i| {
-                let mut c = best.cols.clone();
-                c.remove(i);
-                Candidate::new(p, held_out, &c, None)
-            })
-            .collect::<Result<Vec<_>>>()?
-            .into_iter()
-            .flatten()
-            .collect();
-        removals.sort_by(|a, b| a.max().total_cmp(&b.max()));
+        let removals = judge_all(
+            p,
+            held_out,
+            (0..best.cols.len())
+                .map(|i| {
+                    let mut c = best.cols.clone();
+                    c.remove(i);
+                    c
+                })
+                .collect(),
+        )?;
         // The two most promising, with their nodes moved into place, are judged.
         for c in removals.into_iter().take(2) {
             let c = polish(p, held_out, c, fixed)?;
@@ -523,14 +540,7 @@ fn reseed(
                 }
             }
         }
-        let mut judged: Vec<Candidate> = seeds
-            .par_iter()
-            .map(|c| Candidate::new(p, held_out, c, None))
-            .collect::<Result<Vec<_>>>()?
-            .into_iter()
-            .flatten()
-            .collect();
-        judged.sort_by(|a, b| a.max().total_cmp(&b.max()));
+        let judged = judge_all(p, held_out, seeds)?;
         let mut found: Option<Candidate> = None;
         for seed in judged.into_iter().take(SEEDS_EXCHANGED) {
             let c = exchange(p, held_out, seed, fixed)?;

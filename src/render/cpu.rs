@@ -162,8 +162,8 @@ fn pixel(p: &Prepared, x: usize, y: usize) -> [f32; 3] {
             *v += p.spectra[cmf + c * n_wl + i] as f64 * l;
         }
     };
-    let px = pixel_position(p, x, y)[0];
-    match hit_pixel(p, x, y) {
+    let [px, py] = pixel_position(p, x, y);
+    match hit(&p.objects, super::rows::row(&p.rows, y), px, py) {
         None if p.params.flags & HIDE_BACKGROUND != 0 => {}
         None => {
             let lt = &p.lightings[p.params.background as usize];
