@@ -36,6 +36,8 @@ pub struct Estimator {
     pub(crate) reference: Vec<Xyz>,
     /// Per stimulus: its CIELAB white.
     pub(crate) white: Vec<Xyz>,
+    /// Per stimulus: its reference colour in CIELAB against that white.
+    reference_lab: Vec<Lab>,
     /// Per stimulus: the factor from its light's tabulated values to the scale above.
     scale: Vec<f64>,
 }
@@ -63,6 +65,7 @@ impl Estimator {
             value: Vec::new(),
             reference: Vec::new(),
             white: Vec::new(),
+            reference_lab: Vec::new(),
             scale: Vec::new(),
         };
         for s in stimuli {
@@ -89,6 +92,11 @@ impl Estimator {
                 White::OwnLight => Xyz::new(wx, wy, wz),
                 White::Fixed(w) => w,
             });
+            let (reference, white) = (
+                out.reference[out.reference.len() - 1],
+                out.white[out.white.len() - 1],
+            );
+            out.reference_lab.push(Lab::from_xyz(reference, white));
             out.light.push(light);
             out.value.push(value);
             out.scale.push(100.0 / y);
@@ -120,8 +128,7 @@ impl Estimator {
 
     /// CIEDE2000 of `xyz` against stimulus `s`'s reference.
     pub(crate) fn error_of(&self, s: usize, xyz: Xyz) -> f64 {
-        let w = self.white[s];
-        delta_e_2000(Lab::from_xyz(xyz, w), Lab::from_xyz(self.reference[s], w))
+        delta_e_2000(Lab::from_xyz(xyz, self.white[s]), self.reference_lab[s])
     }
 
     /// The error of each stimulus on `q`; infinite where `q` misses a light altogether.

@@ -13,13 +13,16 @@
 
 use super::estimate::{worst, Estimator};
 use super::Quadrature;
-use crate::colorimetry::{Lab, Xyz};
+use crate::colorimetry::{delta_e_2000, Lab, Xyz};
 use crate::error::Result;
 use crate::spectrum::Rule;
 use nalgebra::{DMatrix, DVector};
 
+/// The channel pairs (c <= d) of the coupled normal equations' blocks.
+const BLOCKS: [(usize, usize); 6] = [(0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)];
+
 /// Lawson iterations at most per node set (it stops after six without progress).
-const LAWSON_ITERATIONS: usize = 40;
+pub(crate) const LAWSON_ITERATIONS: usize = 40;
 
 /// Relative weight of the pull towards `cmf * cell width`.
 const PRIOR: f64 = 1e-7;
@@ -31,8 +34,10 @@ const WHITE_WEIGHT: f64 = 4.0;
 struct Row<'a> {
     values: &'a [f64],
     target: [f64; 3],
-    /// How far CIELAB moves per unit of X, Y, Z.
+    /// How far CIELAB moves per unit of X, Y, Z (the cheap, per-channel form).
     scale: [f64; 3],
+    /// CIEDE2000 to first order: a small step `d` in XYZ moves it by `sqrt(d' Q d)`.
+    metric: [[f64; 3]; 3],
 }
 
 /// The least-squares problem of an estimator's stimuli.
@@ -59,6 +64,7 @@ impl<'a> Problem<'a> {
                 values: &est.value[s],
                 target: est.reference[s].0,
                 scale: lab_scale(est.reference[s], est.white[s]),
+                metric: local_metric(est.reference[s], est.white[s]),
             })
             .collect();
         let stimuli = rows.len();
@@ -72,6 +78,7 @@ impl<'a> Problem<'a> {
                     values: l,
                     target: w.0,
                     scale: lab_scale(w, est.white[s]).map(|v| WHITE_WEIGHT.sqrt() * v),
+                    metric: local_metric(w, est.white[s]).map(|r| r.map(|v| WHITE_WEIGHT * v)),
                 });
             }
         }
@@ -103,7 +110,44 @@ impl<'a> Problem<'a> {
         self.solve(cols, eq)
     }
 
-    /// Least squares for `cols` with row weights `u` on the stimuli (whites: their mean).
+    /// Least squares for `cols` with row weights `u` on the stimuli (whites: their mean), each
+    /// residual measured by its row's full CIEDE2000 metric: the three channels' weights are solved
+    /// together, since the metric couples them (a hue error moves X and Z together).
+    pub(crate) fn solve_coupled_weighted(&self, cols: &[usize], u: &[f64]) -> Option<Weights> {
+        let n = cols.len();
+        let mean = u.iter().sum::<f64>() / u.len().max(1) as f64;
+        let rows = self.rows.len();
+        let ur = |r: usize| if r < self.stimuli { u[r] } else { mean };
+        let v = DMatrix::from_fn(rows, n, |r, i| self.rows[r].values[cols[i]]);
+        let mut g = DMatrix::<f64>::zeros(3 * n, 3 * n);
+        for (c, d) in BLOCKS {
+            // Q_cd = V' diag(u q_cd) V, by a matrix product.
+            let k = DVector::from_fn(rows, |r, _| ur(r) * self.rows[r].metric[c][d]);
+            let mut scaled = v.clone();
+            for mut col in scaled.column_iter_mut() {
+                col.component_mul_assign(&k);
+            }
+            let block = v.tr_mul(&scaled);
+            g.view_mut((c * n, d * n), (n, n)).copy_from(&block);
+            if c != d {
+                g.view_mut((d * n, c * n), (n, n))
+                    .copy_from(&block.transpose());
+            }
+        }
+        let t = DMatrix::from_fn(rows, 3, |r, c| {
+            let row = &self.rows[r];
+            ur(r)
+                * (0..3)
+                    .map(|d| row.metric[c][d] * row.target[d])
+                    .sum::<f64>()
+        });
+        let ht = v.tr_mul(&t);
+        let h = DVector::from_fn(3 * n, |x, _| ht[(x % n, x / n)]);
+        self.solve_coupled(cols, g, h)
+    }
+
+    /// Least squares for `cols` with row weights `u` on the stimuli (whites: their mean), each
+    /// channel on its own with its row's per-channel scale.
     pub(crate) fn solve_weighted(&self, cols: &[usize], u: &[f64]) -> Option<Weights> {
         let mean = u.iter().sum::<f64>() / u.len().max(1) as f64;
         let root: Vec<f64> = (0..self.rows.len())
@@ -118,6 +162,29 @@ impl<'a> Problem<'a> {
             (a.tr_mul(&a), a.tr_mul(&b))
         });
         self.solve(cols, eq)
+    }
+
+    /// Solves the coupled normal equations (channel-major blocks) with each channel's pull
+    /// towards `cmf * cell width`.
+    fn solve_coupled(
+        &self,
+        cols: &[usize],
+        mut g: DMatrix<f64>,
+        mut h: DVector<f64>,
+    ) -> Option<Weights> {
+        let n = cols.len();
+        let cells = cell_widths(cols, self.est.grid.len());
+        for c in 0..3 {
+            let trace: f64 = (0..n).map(|i| g[(c * n + i, c * n + i)]).sum();
+            let mu = PRIOR * trace / n as f64 + 1e-300;
+            for i in 0..n {
+                g[(c * n + i, c * n + i)] += mu;
+                h[c * n + i] += mu * self.cmf[cols[i]][c] * cells[i];
+            }
+        }
+        let x = g.cholesky()?.solve(&h);
+        let w: Weights = (0..n).map(|i| [x[i], x[n + i], x[2 * n + i]]).collect();
+        w.iter().flatten().all(|v| v.is_finite()).then_some(w)
     }
 
     /// Solves the normal equations with the pull towards `cmf * cell width`.
@@ -177,10 +244,19 @@ impl<'a> Problem<'a> {
             .sum()
     }
 
-    /// Least squares, then Lawson's reweighting, from the row weights `start` (a similar node
-    /// set's, which makes it converge in a few iterations) or uniform ones: the weights with
-    /// the smallest largest error found, the errors, and the row weights that gave them.
-    pub(crate) fn minimax(&self, cols: &[usize], start: Option<&[f64]>) -> Option<Minimax> {
+    /// Least squares under `metric`, then Lawson's reweighting, from the row weights `start`
+    /// (a similar node set's, which makes it converge in a few iterations) or uniform ones: the
+    /// weights with the smallest largest error found, the errors, and the row weights that gave
+    /// them. At most `iterations` Lawson steps, given up after three when the largest error is
+    /// still above `give_up` (a quick judge of many node sets, most of which are discarded).
+    pub(crate) fn minimax_within(
+        &self,
+        cols: &[usize],
+        start: Option<&[f64]>,
+        iterations: usize,
+        give_up: f64,
+        metric: Metric,
+    ) -> Option<Minimax> {
         let warm = start.is_some_and(|u| u.len() == self.stimuli);
         let mut u = match start {
             Some(u) if warm => u.to_vec(),
@@ -188,8 +264,15 @@ impl<'a> Problem<'a> {
         };
         let mut best: Option<Minimax> = None;
         let mut since_best = 0;
-        for _ in 0..LAWSON_ITERATIONS {
-            let Some(w) = self.solve_weighted(cols, &u) else {
+        for k in 0..iterations {
+            if k == 3 && best.as_ref().is_some_and(|b| b.max > give_up) {
+                break;
+            }
+            let solved = match metric {
+                Metric::Channels => self.solve_weighted(cols, &u),
+                Metric::Coupled => self.solve_coupled_weighted(cols, &u),
+            };
+            let Some(w) = solved else {
                 break;
             };
             let e = self.errors(cols, &w);
@@ -216,6 +299,15 @@ impl<'a> Problem<'a> {
         }
         best
     }
+}
+
+/// How a least-squares row measures its residual.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Metric {
+    /// Each channel on its own, scaled by how far it moves CIELAB at most (cheap; the search).
+    Channels,
+    /// CIEDE2000's own quadratic form to first order, which couples the channels.
+    Coupled,
 }
 
 /// Minimax weights of a node set.
@@ -250,6 +342,40 @@ fn lab_scale(xyz: Xyz, white: Xyz) -> [f64; 3] {
         200.0 / sc * df(xyz.0[2] / w[2]) / w[2],
     ]
     .map(|v: f64| if v.is_finite() { v } else { 0.0 })
+}
+
+/// CIEDE2000 to first order at `xyz` (white `white`): the symmetric `Q` with
+/// `dE00(xyz + d, xyz)^2 ~ d' Q d` for small `d`, from CIEDE2000 itself by differences (it is
+/// a norm of the step to first order, so `dE00^2 / h^2` converges as `h` shrinks), its negative
+/// eigenvalues (rounding) set to zero.
+fn local_metric(xyz: Xyz, white: Xyz) -> [[f64; 3]; 3] {
+    let h = 1e-4 * xyz.0.iter().fold(1e-2f64, |m, v| m.max(v.abs()));
+    let base = Lab::from_xyz(xyz, white);
+    let de2 = |d: [f64; 3]| {
+        let moved = Xyz(std::array::from_fn(|c| xyz.0[c] + h * d[c]));
+        let e = delta_e_2000(Lab::from_xyz(moved, white), base);
+        if e.is_finite() {
+            e * e / (h * h)
+        } else {
+            0.0
+        }
+    };
+    let unit = |c: usize| std::array::from_fn(|k| if k == c { 1.0 } else { 0.0 });
+    let diag: [f64; 3] = std::array::from_fn(|c| de2(unit(c)));
+    let mut q = nalgebra::Matrix3::from_diagonal(&nalgebra::Vector3::from(diag));
+    for c in 0..3 {
+        for d in c + 1..3 {
+            let both = std::array::from_fn(|k| if k == c || k == d { 1.0 } else { 0.0 });
+            let v = 0.5 * (de2(both) - diag[c] - diag[d]);
+            q[(c, d)] = v;
+            q[(d, c)] = v;
+        }
+    }
+    let eig = q.symmetric_eigen();
+    let q = eig.eigenvectors
+        * nalgebra::Matrix3::from_diagonal(&eig.eigenvalues.map(|v| v.max(0.0)))
+        * eig.eigenvectors.transpose();
+    std::array::from_fn(|c| std::array::from_fn(|d| q[(c, d)]))
 }
 
 /// The width (in grid steps) of the interval each node stands for: half way to its neighbours,
@@ -298,6 +424,50 @@ mod tests {
     }
 
     #[test]
+    fn the_local_metric_is_ciede2000_to_first_order() {
+        // Small steps in directions that mix the channels: sqrt(d' Q d) against CIEDE2000.
+        let w = Xyz::new(95.047, 100.0, 108.883);
+        for x in [
+            Xyz::new(40.0, 42.0, 45.0),
+            Xyz::new(20.0, 12.0, 5.0),
+            Xyz::new(8.0, 15.0, 30.0),
+        ] {
+            let q = local_metric(x, w);
+            for d in [[1.0, 0.0, 0.0], [1.0, -1.0, 0.5], [0.2, 0.3, -1.0]] {
+                let h = 1e-3;
+                let moved = Xyz(std::array::from_fn(|c| x.0[c] + h * d[c]));
+                let want = delta_e_2000(Lab::from_xyz(moved, w), Lab::from_xyz(x, w));
+                let quad: f64 = (0..3)
+                    .flat_map(|c| (0..3).map(move |k| (c, k)))
+                    .map(|(c, k)| d[c] * q[c][k] * d[k])
+                    .sum();
+                let got = h * quad.sqrt();
+                assert!(
+                    (got - want).abs() < 1e-2 * want,
+                    "{x:?} {d:?}: {got} vs {want}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn coupled_weights_beat_or_match_per_channel_ones() {
+        // The same nodes: weights under CIEDE2000's own metric err no more than per channel.
+        let light = crate::data::spectrum("D65").unwrap().data;
+        let s = colorchecker_under("D65", &light).unwrap();
+        let e = Estimator::new(&s, Observer::Cie1931, 380.0, 780.0, White::OwnLight).unwrap();
+        let p = Problem::new(&e).unwrap();
+        let cols = [60, 100, 150, 190, 240];
+        let max = |m: Metric| {
+            p.minimax_within(&cols, None, LAWSON_ITERATIONS, f64::INFINITY, m)
+                .unwrap()
+                .max
+        };
+        let (channels, coupled) = (max(Metric::Channels), max(Metric::Coupled));
+        assert!(coupled <= 1.02 * channels, "{coupled} vs {channels}");
+    }
+
+    #[test]
     fn every_node_on_the_grid_reproduces_the_reference() {
         // All 401 nodes: least squares finds Simpson's weights (or as good), so no error.
         let light = crate::data::spectrum("FL2").unwrap().data;
@@ -305,7 +475,15 @@ mod tests {
         let e = Estimator::new(&s, Observer::Cie1931, 380.0, 780.0, White::OwnLight).unwrap();
         let p = Problem::new(&e).unwrap();
         let cols: Vec<usize> = (0..e.grid().len()).step_by(5).collect();
-        let m = p.minimax(&cols, None).unwrap();
+        let m = p
+            .minimax_within(
+                &cols,
+                None,
+                LAWSON_ITERATIONS,
+                f64::INFINITY,
+                Metric::Channels,
+            )
+            .unwrap();
         assert_eq!(m.weights.len(), 81);
         assert!(m.max < 0.05, "{}", m.max);
     }
