@@ -87,16 +87,14 @@ impl Estimator {
             let value: Vec<f64> = value.iter().map(|v| 100.0 * s.gain * v / y).collect();
             let [x, yy, z] = reference.integrate(&value);
             let [wx, wy, wz] = reference.integrate(&light);
-            out.reference.push(Xyz::new(x, yy, z));
-            out.white.push(match white {
+            let colour = Xyz::new(x, yy, z);
+            let lab_white = match white {
                 White::OwnLight => Xyz::new(wx, wy, wz),
                 White::Fixed(w) => w,
-            });
-            let (reference, white) = (
-                out.reference[out.reference.len() - 1],
-                out.white[out.white.len() - 1],
-            );
-            out.reference_lab.push(Lab::from_xyz(reference, white));
+            };
+            out.reference.push(colour);
+            out.white.push(lab_white);
+            out.reference_lab.push(Lab::from_xyz(colour, lab_white));
             out.light.push(light);
             out.value.push(value);
             out.scale.push(100.0 / y);

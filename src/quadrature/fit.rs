@@ -253,9 +253,7 @@ impl Candidate {
         if cols.is_empty() {
             return Ok(None);
         }
-        let start_rows = start.map(|c| &c.rows[..]);
-        let iterations = super::lsq::LAWSON_ITERATIONS;
-        let Some(m) = p.minimax_within(cols, start_rows, iterations, f64::INFINITY, metric) else {
+        let Some(m) = p.minimax(cols, start.map(|c| &c.rows[..]), metric) else {
             return Ok(None);
         };
         let (w, fit) = (m.weights, m.errors);
@@ -681,8 +679,7 @@ fn exchange(
 /// The same nodes with their weights solved under CIEDE2000's full metric ([`Metric::Coupled`],
 /// Lawson started from the candidate's row weights), when that lowers the largest error over
 /// the fit and held-out sets. The search ranks node sets by the cheaper per-channel metric; the
-/// nodes it keeps are then worth the better weights (the cylinders under D65, 9 nodes: 0.400
-/// to 0.384).
+/// nodes it keeps are then worth the better weights.
 fn reweigh(p: &Problem, held_out: Option<&Estimator>, c: Candidate) -> Result<Candidate> {
     Ok(
         match Candidate::with_metric(p, held_out, &c.cols, Some(&c), Metric::Coupled)? {
@@ -692,10 +689,10 @@ fn reweigh(p: &Problem, held_out: Option<&Estimator>, c: Candidate) -> Result<Ca
     )
 }
 
-/// Coordinate descent on the minimax error: each node (not the lines) tries every wavelength
-/// within [`DESCENT_REACH_NM`] at 1 nm, each judged by its own minimax weights over the fit set
-/// (Lawson started from the current row weights), and takes the best if it lowers the largest
-/// error. Rounds go on while a move does. The minimax error changes abruptly with a node's
+/// Coordinate descent on the minimax error, in the passes of [`DESCENT_PASSES`] (a reach and a
+/// step each): each node (not the lines) tries every wavelength within the reach at the step,
+/// each judged by a quick minimax over the fit set (Lawson started from the current row
+/// weights), and takes the best if it lowers the largest error. Rounds go on while a move does. The minimax error changes abruptly with a node's
 /// position (a few nm can halve it), so every move is judged, not ranked by a cheaper score.
 fn descend(
     p: &Problem,

@@ -22,7 +22,7 @@ use nalgebra::{DMatrix, DVector};
 const BLOCKS: [(usize, usize); 6] = [(0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)];
 
 /// Lawson iterations at most per node set (it stops after six without progress).
-pub(crate) const LAWSON_ITERATIONS: usize = 40;
+const LAWSON_ITERATIONS: usize = 40;
 
 /// Relative weight of the pull towards `cmf * cell width`.
 const PRIOR: f64 = 1e-7;
@@ -244,6 +244,16 @@ impl<'a> Problem<'a> {
             .sum()
     }
 
+    /// [`Problem::minimax_within`] with every Lawson step and no giving up.
+    pub(crate) fn minimax(
+        &self,
+        cols: &[usize],
+        start: Option<&[f64]>,
+        metric: Metric,
+    ) -> Option<Minimax> {
+        self.minimax_within(cols, start, LAWSON_ITERATIONS, f64::INFINITY, metric)
+    }
+
     /// Least squares under `metric`, then Lawson's reweighting, from the row weights `start`
     /// (a similar node set's, which makes it converge in a few iterations) or uniform ones: the
     /// weights with the smallest largest error found, the errors, and the row weights that gave
@@ -458,11 +468,7 @@ mod tests {
         let e = Estimator::new(&s, Observer::Cie1931, 380.0, 780.0, White::OwnLight).unwrap();
         let p = Problem::new(&e).unwrap();
         let cols = [60, 100, 150, 190, 240];
-        let max = |m: Metric| {
-            p.minimax_within(&cols, None, LAWSON_ITERATIONS, f64::INFINITY, m)
-                .unwrap()
-                .max
-        };
+        let max = |m: Metric| p.minimax(&cols, None, m).unwrap().max;
         let (channels, coupled) = (max(Metric::Channels), max(Metric::Coupled));
         assert!(coupled <= 1.02 * channels, "{coupled} vs {channels}");
     }
@@ -475,15 +481,7 @@ mod tests {
         let e = Estimator::new(&s, Observer::Cie1931, 380.0, 780.0, White::OwnLight).unwrap();
         let p = Problem::new(&e).unwrap();
         let cols: Vec<usize> = (0..e.grid().len()).step_by(5).collect();
-        let m = p
-            .minimax_within(
-                &cols,
-                None,
-                LAWSON_ITERATIONS,
-                f64::INFINITY,
-                Metric::Channels,
-            )
-            .unwrap();
+        let m = p.minimax(&cols, None, Metric::Channels).unwrap();
         assert_eq!(m.weights.len(), 81);
         assert!(m.max < 0.05, "{}", m.max);
     }
