@@ -14,6 +14,7 @@ use specmap::render::prepare::Prepared;
 use specmap::render::{cpu, env, sweep, Backend, Film, Preset, Scene, Spectral};
 use specmap::spectrum::Tabulated;
 use specmap::thinfilm::{Index, Layer, Material};
+use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -522,7 +523,20 @@ fn quadrature_for(
         ),
         Some(QuadratureArg::Scene) | None => Family::Scene,
     };
-    let s = scene.choose_quadrature(spectral.observer, spectral.space, family, &opts)?;
+    // A scene's fit takes seconds (half a minute for the cylinders): say what is happening.
+    let spinner = std::io::stderr().is_terminal().then(|| {
+        let b = indicatif::ProgressBar::new_spinner();
+        b.set_message(format!(
+            "choosing the wavelengths for CIEDE2000 {tolerance}"
+        ));
+        b.enable_steady_tick(std::time::Duration::from_millis(120));
+        b
+    });
+    let s = scene.choose_quadrature(spectral.observer, spectral.space, family, &opts);
+    if let Some(b) = spinner {
+        b.finish_and_clear();
+    }
+    let s = s?;
     Ok((s.quadrature.clone(), Some(s)))
 }
 

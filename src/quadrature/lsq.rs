@@ -33,11 +33,16 @@ const WHITE_WEIGHT: f64 = 4.0;
 /// One row of the least squares: a stimulus (or a light's white) at 1 nm.
 struct Row<'a> {
     values: &'a [f64],
+    /// The light the row's colour is divided by (a white's is its own values).
+    light: &'a [f64],
     target: [f64; 3],
     /// How far CIELAB moves per unit of X, Y, Z (the cheap, per-channel form).
     scale: [f64; 3],
-    /// CIEDE2000 to first order: a small step `d` in XYZ moves it by `sqrt(d' Q d)`.
+    /// CIEDE2000 to first order: a small step `d` in XYZ moves it by `sqrt(d' Q d)` (a
+    /// white's times its weight).
     metric: [[f64; 3]; 3],
+    /// The same, unweighted: the colour error itself.
+    colour_metric: [[f64; 3]; 3],
 }
 
 /// The least-squares problem of an estimator's stimuli.
@@ -60,11 +65,16 @@ impl<'a> Problem<'a> {
     pub(crate) fn new(est: &'a Estimator) -> Result<Problem<'a>> {
         let reference = Quadrature::uniform(est.grid, Rule::Simpson, est.observer)?;
         let mut rows: Vec<Row> = (0..est.len())
-            .map(|s| Row {
-                values: &est.value[s],
-                target: est.reference[s].0,
-                scale: lab_scale(est.reference[s], est.white[s]),
-                metric: local_metric(est.reference[s], est.white[s]),
+            .map(|s| {
+                let metric = local_metric(est.reference[s], est.white[s]);
+                Row {
+                    values: &est.value[s],
+                    light: &est.light[s],
+                    target: est.reference[s].0,
+                    scale: lab_scale(est.reference[s], est.white[s]),
+                    metric,
+                    colour_metric: metric,
+                }
             })
             .collect();
         let stimuli = rows.len();
@@ -74,11 +84,14 @@ impl<'a> Problem<'a> {
             if !seen.contains(&l) {
                 seen.push(l);
                 let w = Xyz(reference.integrate(l));
+                let metric = local_metric(w, est.white[s]);
                 rows.push(Row {
                     values: l,
+                    light: l,
                     target: w.0,
                     scale: lab_scale(w, est.white[s]).map(|v| WHITE_WEIGHT.sqrt() * v),
-                    metric: local_metric(w, est.white[s]).map(|r| r.map(|v| WHITE_WEIGHT * v)),
+                    metric: metric.map(|r| r.map(|v| WHITE_WEIGHT * v)),
+                    colour_metric: metric,
                 });
             }
         }
@@ -95,6 +108,22 @@ impl<'a> Problem<'a> {
             cmf: reference.weights().to_vec(),
             gram,
         })
+    }
+
+    /// Rows: the stimuli, then each light's white.
+    pub(super) fn row_count(&self) -> usize {
+        self.rows.len()
+    }
+
+    /// Row `r`'s stimulus at 1 nm, the light it is divided by, and its 1 nm colour.
+    pub(super) fn row_spectra(&self, r: usize) -> (&[f64], &[f64], [f64; 3]) {
+        let row = &self.rows[r];
+        (row.values, row.light, row.target)
+    }
+
+    /// Row `r`'s local CIEDE2000 metric, unweighted (a white's error is a white's colour).
+    pub(super) fn row_metric(&self, r: usize) -> &[[f64; 3]; 3] {
+        &self.rows[r].colour_metric
     }
 
     /// Plain least squares (unit row weights) for `cols`, from the precomputed equations.

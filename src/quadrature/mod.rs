@@ -17,6 +17,7 @@ pub mod estimate;
 pub mod fit;
 mod lsq;
 pub mod meyer;
+mod pnorm;
 
 use crate::colorimetry::{Cmfs, Observer, Xyz};
 use crate::error::{Error, Result};
