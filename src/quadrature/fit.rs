@@ -531,9 +531,9 @@ const SEED_LAST_NM: (usize, usize, usize) = (600, 720, 10);
 /// Seeds ranked best by a quick minimax that are judged fully, at each node count.
 const SEEDS_JUDGED: usize = 12;
 
-/// A node count whose best seed errs more than this times the target is not searched: the
-/// descents lower a seed's largest error by at most about 0.57 times on the presets (the
-/// cylinders under A at 7 nodes, 0.70 to 0.40).
+/// A node count whose best seed errs more than this times the target is not searched: on the
+/// presets no descent brought a seed's largest error below about 0.57 of it (the cylinders
+/// under A at 7 nodes, 0.70 to 0.40).
 const SEED_REACH: f64 = 2.0;
 
 /// Seeds improved by [`exchange`] and [`descend`] at each node count.
@@ -625,7 +625,7 @@ fn reseed(
         quick.sort_by(|a, b| a.1.total_cmp(&b.1));
         quick.truncate(SEEDS_JUDGED);
         let judged = judge_all(p, held_out, quick.into_iter().map(|(c, _)| c).collect())?;
-        // A descent lowers a seed's error by at most about half here: further seeds are left.
+        // Too far for a descent to bring within the target: fewer nodes will not do.
         if judged.first().is_none_or(|c| c.max() > SEED_REACH * target) {
             break;
         }
