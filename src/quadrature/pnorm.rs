@@ -6,9 +6,8 @@
 //! stimulus's local CIEDE2000 metric, `d_r` its colour's step from the 1 nm colour), and the
 //! colour is divided by its light's white on the same nodes, as the renderer divides. In the
 //! weights the step is nearly linear, so each level is nearly convex: unlike Lawson's
-//! reweighting (a heuristic on a per-channel least squares) the minimiser does not jump when a
-//! node moves by a nanometre. The true CIEDE2000 of every iterate is measured and the best
-//! kept.
+//! reweighting (a heuristic on a per-channel least squares), where it ends does not depend on
+//! where it starts. The true CIEDE2000 of each level's result is measured and the best kept.
 
 use super::estimate::worst;
 use super::lsq::{Minimax, Problem, Weights};
@@ -90,7 +89,7 @@ impl Problem<'_> {
     /// Row `r`'s relative colour moves by `a_i` in channel `c` per unit of `w_ic` and by
     /// `-xyz_c b_i` in every channel per unit of `w_iY` (the division by the white), so its
     /// derivative in block `c` is `e_c a' - [c = Y] xyz b'`, and the Hessian's blocks are sums
-    /// of `a a'`, `a b'` and `b b'` with per-row coefficients: ten weighted Gram products.
+    /// of `a a'`, `a b'` and `b b'` with per-row coefficients: eleven weighted Gram products.
     fn newton_step(&self, cols: &[usize], x: &DVector<f64>, p: f64) -> Option<DVector<f64>> {
         let n = cols.len();
         let rows = self.row_count();
@@ -111,35 +110,13 @@ impl Problem<'_> {
         });
         // Per row: the coefficients of a a' in block (c, d), of a b' in (c, Y), of b b' in
         // (Y, Y), and of a and b in the gradient's block c.
-        let mut kaa = [
-            [
-                DVector::zeros(rows),
-                DVector::zeros(rows),
-                DVector::zeros(rows),
-            ],
-            [
-                DVector::zeros(rows),
-                DVector::zeros(rows),
-                DVector::zeros(rows),
-            ],
-            [
-                DVector::zeros(rows),
-                DVector::zeros(rows),
-                DVector::zeros(rows),
-            ],
-        ];
-        let mut kab = [
-            DVector::zeros(rows),
-            DVector::zeros(rows),
-            DVector::zeros(rows),
-        ];
-        let mut kbb = DVector::zeros(rows);
-        let mut ga = [
-            DVector::zeros(rows),
-            DVector::zeros(rows),
-            DVector::zeros(rows),
-        ];
-        let mut gb = DVector::zeros(rows);
+        let zeros = || DVector::<f64>::zeros(rows);
+        let mut kaa: [[DVector<f64>; 3]; 3] =
+            std::array::from_fn(|_| std::array::from_fn(|_| zeros()));
+        let mut kab: [DVector<f64>; 3] = std::array::from_fn(|_| zeros());
+        let mut kbb = zeros();
+        let mut ga: [DVector<f64>; 3] = std::array::from_fn(|_| zeros());
+        let mut gb = zeros();
         for r in 0..rows {
             let t = qs[r] / s;
             if t < 1e-12 {
