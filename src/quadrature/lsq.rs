@@ -38,11 +38,8 @@ struct Row<'a> {
     target: [f64; 3],
     /// How far CIELAB moves per unit of X, Y, Z (the cheap, per-channel form).
     scale: [f64; 3],
-    /// CIEDE2000 to first order: a small step `d` in XYZ moves it by `sqrt(d' Q d)` (a
-    /// white's times its weight).
+    /// CIEDE2000 to first order: a small step `d` in XYZ moves it by `sqrt(d' Q d)`.
     metric: [[f64; 3]; 3],
-    /// The same, unweighted: the colour error itself.
-    colour_metric: [[f64; 3]; 3],
 }
 
 /// The least-squares problem of an estimator's stimuli.
@@ -65,16 +62,12 @@ impl<'a> Problem<'a> {
     pub(crate) fn new(est: &'a Estimator) -> Result<Problem<'a>> {
         let reference = Quadrature::uniform(est.grid, Rule::Simpson, est.observer)?;
         let mut rows: Vec<Row> = (0..est.len())
-            .map(|s| {
-                let metric = local_metric(est.reference[s], est.white[s]);
-                Row {
-                    values: &est.value[s],
-                    light: &est.light[s],
-                    target: est.reference[s].0,
-                    scale: lab_scale(est.reference[s], est.white[s]),
-                    metric,
-                    colour_metric: metric,
-                }
+            .map(|s| Row {
+                values: &est.value[s],
+                light: &est.light[s],
+                target: est.reference[s].0,
+                scale: lab_scale(est.reference[s], est.white[s]),
+                metric: local_metric(est.reference[s], est.white[s]),
             })
             .collect();
         let stimuli = rows.len();
@@ -84,14 +77,12 @@ impl<'a> Problem<'a> {
             if !seen.contains(&l) {
                 seen.push(l);
                 let w = Xyz(reference.integrate(l));
-                let metric = local_metric(w, est.white[s]);
                 rows.push(Row {
                     values: l,
                     light: l,
                     target: w.0,
                     scale: lab_scale(w, est.white[s]).map(|v| WHITE_WEIGHT.sqrt() * v),
-                    metric: metric.map(|r| r.map(|v| WHITE_WEIGHT * v)),
-                    colour_metric: metric,
+                    metric: local_metric(w, est.white[s]),
                 });
             }
         }
@@ -123,7 +114,17 @@ impl<'a> Problem<'a> {
 
     /// Row `r`'s local CIEDE2000 metric, unweighted (a white's error is a white's colour).
     pub(super) fn row_metric(&self, r: usize) -> &[[f64; 3]; 3] {
-        &self.rows[r].colour_metric
+        &self.rows[r].metric
+    }
+
+    /// Row `r`'s metric in the least squares: a white's weighs as [`WHITE_WEIGHT`] stimuli.
+    fn weighted_metric(&self, r: usize) -> [[f64; 3]; 3] {
+        let m = self.rows[r].metric;
+        if r < self.stimuli {
+            m
+        } else {
+            m.map(|row| row.map(|v| WHITE_WEIGHT * v))
+        }
     }
 
     /// Plain least squares (unit row weights) for `cols`, from the precomputed equations.
@@ -148,15 +149,12 @@ impl<'a> Problem<'a> {
         let rows = self.rows.len();
         let ur = |r: usize| if r < self.stimuli { u[r] } else { mean };
         let v = DMatrix::from_fn(rows, n, |r, i| self.rows[r].values[cols[i]]);
+        let metric: Vec<[[f64; 3]; 3]> = (0..rows).map(|r| self.weighted_metric(r)).collect();
         let mut g = DMatrix::<f64>::zeros(3 * n, 3 * n);
         for (c, d) in BLOCKS {
             // Q_cd = V' diag(u q_cd) V, by a matrix product.
-            let k = DVector::from_fn(rows, |r, _| ur(r) * self.rows[r].metric[c][d]);
-            let mut scaled = v.clone();
-            for mut col in scaled.column_iter_mut() {
-                col.component_mul_assign(&k);
-            }
-            let block = v.tr_mul(&scaled);
+            let k = DVector::from_fn(rows, |r, _| ur(r) * metric[r][c][d]);
+            let block = weighted_gram(&v, &k, &v);
             g.view_mut((c * n, d * n), (n, n)).copy_from(&block);
             if c != d {
                 g.view_mut((d * n, c * n), (n, n))
@@ -164,10 +162,9 @@ impl<'a> Problem<'a> {
             }
         }
         let t = DMatrix::from_fn(rows, 3, |r, c| {
-            let row = &self.rows[r];
             ur(r)
                 * (0..3)
-                    .map(|d| row.metric[c][d] * row.target[d])
+                    .map(|d| metric[r][c][d] * self.rows[r].target[d])
                     .sum::<f64>()
         });
         let ht = v.tr_mul(&t);
@@ -358,6 +355,15 @@ pub(crate) struct Minimax {
     pub(crate) rows: Vec<f64>,
 }
 
+/// `l' diag(k) m`: a Gram product with a weight per row.
+pub(super) fn weighted_gram(l: &DMatrix<f64>, k: &DVector<f64>, m: &DMatrix<f64>) -> DMatrix<f64> {
+    let mut scaled = m.clone();
+    for mut col in scaled.column_iter_mut() {
+        col.component_mul_assign(k);
+    }
+    l.tr_mul(&scaled)
+}
+
 /// How far CIELAB moves per unit of X, Y and Z at `xyz` (white `white`), each over CIEDE2000's
 /// weight (S_L for L*, S_C for a* and b*): the largest coefficient the channel enters with.
 fn lab_scale(xyz: Xyz, white: Xyz) -> [f64; 3] {
@@ -439,11 +445,18 @@ fn cell_widths(cols: &[usize], len: usize) -> Vec<f64> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use crate::colorimetry::Observer;
     use crate::quadrature::estimate::White;
     use crate::tradeoff::colorchecker_under;
+
+    /// The 24 ColorChecker patches under `light`, each against its light's own white.
+    pub(in crate::quadrature) fn chart(light: &str) -> Estimator {
+        let l = crate::data::spectrum(light).unwrap().data;
+        let s = colorchecker_under(light, &l).unwrap();
+        Estimator::new(&s, Observer::Cie1931, 380.0, 780.0, White::OwnLight).unwrap()
+    }
 
     #[test]
     fn lab_scale_is_the_derivative_of_cielab() {
@@ -492,9 +505,7 @@ mod tests {
     #[test]
     fn coupled_weights_beat_or_match_per_channel_ones() {
         // The same nodes: weights under CIEDE2000's own metric err no more than per channel.
-        let light = crate::data::spectrum("D65").unwrap().data;
-        let s = colorchecker_under("D65", &light).unwrap();
-        let e = Estimator::new(&s, Observer::Cie1931, 380.0, 780.0, White::OwnLight).unwrap();
+        let e = chart("D65");
         let p = Problem::new(&e).unwrap();
         let cols = [60, 100, 150, 190, 240];
         let max = |m: Metric| p.minimax(&cols, None, m).unwrap().max;
@@ -505,9 +516,7 @@ mod tests {
     #[test]
     fn every_node_on_the_grid_reproduces_the_reference() {
         // All 401 nodes: least squares finds Simpson's weights (or as good), so no error.
-        let light = crate::data::spectrum("FL2").unwrap().data;
-        let s = colorchecker_under("FL2", &light).unwrap();
-        let e = Estimator::new(&s, Observer::Cie1931, 380.0, 780.0, White::OwnLight).unwrap();
+        let e = chart("FL2");
         let p = Problem::new(&e).unwrap();
         let cols: Vec<usize> = (0..e.grid().len()).step_by(5).collect();
         let m = p.minimax(&cols, None, Metric::Channels).unwrap();

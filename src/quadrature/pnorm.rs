@@ -10,7 +10,7 @@
 //! where it starts. The true CIEDE2000 of each level's result is measured and the best kept.
 
 use super::estimate::worst;
-use super::lsq::{Minimax, Problem, Weights};
+use super::lsq::{weighted_gram, Minimax, Problem, Weights};
 use nalgebra::{DMatrix, DVector};
 
 /// The p-norm's exponents, one Newton solve each: the last is within `N^(1/p)` (under 3% for a
@@ -144,26 +144,19 @@ impl Problem<'_> {
             kbb[r] = 2.0 * f1 * xqx + 4.0 * f2 * beta * beta;
             gb[r] = -2.0 * f1 * beta;
         }
-        let gram = |l: &DMatrix<f64>, k: &DVector<f64>, m: &DMatrix<f64>| -> DMatrix<f64> {
-            let mut scaled = m.clone();
-            for mut col in scaled.column_iter_mut() {
-                col.component_mul_assign(k);
-            }
-            l.tr_mul(&scaled)
-        };
         let mut h = DMatrix::<f64>::zeros(3 * n, 3 * n);
         let mut g = DVector::<f64>::zeros(3 * n);
         for c in 0..3 {
             for d in c..3 {
-                let mut block = gram(&a, &kaa[c][d], &a);
+                let mut block = weighted_gram(&a, &kaa[c][d], &a);
                 if d == 1 {
-                    block += gram(&a, &kab[c], &b);
+                    block += weighted_gram(&a, &kab[c], &b);
                 }
                 if c == 1 {
-                    block += gram(&b, &kab[d], &a);
+                    block += weighted_gram(&b, &kab[d], &a);
                 }
                 if c == 1 && d == 1 {
-                    block += gram(&b, &kbb, &b);
+                    block += weighted_gram(&b, &kbb, &b);
                 }
                 h.view_mut((c * n, d * n), (n, n)).copy_from(&block);
                 if c != d {
@@ -186,7 +179,7 @@ impl Problem<'_> {
                 .sum()
         };
         let trace = h.trace() / (3 * n) as f64;
-        let f0 = objective(x);
+        let f0: f64 = qs.iter().map(|q| (q / s).powf(half)).sum();
         for damping in [1e-9, 1e-6, 1e-3] {
             let mut hd = h.clone();
             for k in 0..3 * n {
@@ -259,15 +252,8 @@ fn row_weights(e: &[f64], p: f64) -> Vec<f64> {
 mod tests {
     use super::*;
     use crate::colorimetry::Observer;
-    use crate::quadrature::estimate::{Estimator, White};
+    use crate::quadrature::lsq::tests::chart;
     use crate::quadrature::lsq::Metric;
-    use crate::tradeoff::colorchecker_under;
-
-    fn chart(light: &str) -> Estimator {
-        let l = crate::data::spectrum(light).unwrap().data;
-        let s = colorchecker_under(light, &l).unwrap();
-        Estimator::new(&s, Observer::Cie1931, 380.0, 780.0, White::OwnLight).unwrap()
-    }
 
     #[test]
     fn no_small_step_of_the_weights_lowers_the_largest_error() {
