@@ -16,8 +16,9 @@ pub fn render(p: &Prepared) -> Image {
     let (w, h) = (p.params.width as usize, p.params.height as usize);
     let mut pixels = vec![[0f32; 3]; w * h];
     pixels.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+        let mut scratch = Scratch::default();
         for (x, out) in row.iter_mut().enumerate() {
-            *out = pixel(p, x, y);
+            *out = pixel(p, x, y, &mut scratch);
         }
     });
     Image {
@@ -91,11 +92,32 @@ pub fn hit(
     })
 }
 
-fn map_sample(p: &Prepared, map: u32, dir: [f64; 3]) -> Vec<f64> {
+/// A pixel's coefficients, kept between the pixels of a row so that none allocates: per map
+/// sampled, the nonzero coefficients as (index of the lighting's spectrum, value).
+#[derive(Default)]
+struct Scratch {
+    diffuse: Vec<(usize, f64)>,
+    specular: Vec<(usize, f64)>,
+    behind: Vec<(usize, f64)>,
+}
+
+/// The nonzero coefficients of `map` in direction `dir` into `out`. A uniform lighting's maps
+/// are one texel with one nonzero coefficient, so this skips its bilinear taps and the three
+/// zero terms of every wavelength's expansion.
+fn map_sample(p: &Prepared, map: u32, dir: [f64; 3], out: &mut Vec<(usize, f64)>) {
     let [off, w, h, groups] = p.maps[map as usize];
     let off = off as usize;
     let (w, h, g) = (w as usize, h as usize, groups as usize);
-    env::sample(&p.texels[off..off + w * h * g], w, h, g, dir)
+    let texels = &p.texels[off..off + w * h * g];
+    out.clear();
+    let mut push = |values: &mut dyn Iterator<Item = f64>| {
+        out.extend(values.enumerate().filter(|(_, c)| *c != 0.0));
+    };
+    if w * h == 1 {
+        push(&mut texels.iter().flatten().map(|&c| c as f64));
+    } else {
+        push(&mut env::sample(texels, w, h, g, dir).into_iter());
+    }
 }
 
 /// The direction the background is seen in at pixel (x, y): a pinhole at the image centre
@@ -145,15 +167,17 @@ fn film_rt(f: &CpuFilm, i: usize, cos_v: f64, scale: Option<f64>) -> (f64, f64) 
     (rt.r, rt.t)
 }
 
-fn pixel(p: &Prepared, x: usize, y: usize) -> [f32; 3] {
+fn pixel(p: &Prepared, x: usize, y: usize, scratch: &mut Scratch) -> [f32; 3] {
     let n_wl = p.params.n_wl as usize;
     let sp = |off: u32, i: usize| p.spectra[off as usize + i] as f64;
-    let expand = |c: &[f64], off: u32, i: usize| -> f64 {
-        c.iter()
-            .enumerate()
-            .map(|(j, c)| c * sp(off, j * n_wl + i))
-            .sum()
+    let expand = |c: &[(usize, f64)], off: u32, i: usize| -> f64 {
+        c.iter().map(|&(j, c)| c * sp(off, j * n_wl + i)).sum()
     };
+    let Scratch {
+        diffuse: cd,
+        specular: cs,
+        behind: ct,
+    } = scratch;
     let d = background_direction(p, x, y);
     let mut xyz = [0.0f64; 3];
     let cmf = p.params.cmf_offset as usize;
@@ -167,9 +191,9 @@ fn pixel(p: &Prepared, x: usize, y: usize) -> [f32; 3] {
         None if p.params.flags & HIDE_BACKGROUND != 0 => {}
         None => {
             let lt = &p.lightings[p.params.background as usize];
-            let c = map_sample(p, lt.background_map, d);
+            map_sample(p, lt.background_map, d, ct);
             for i in 0..n_wl {
-                add(i, expand(&c, lt.spectra, i));
+                add(i, expand(ct, lt.spectra, i));
             }
         }
         Some((oi, n)) => {
@@ -184,13 +208,12 @@ fn pixel(p: &Prepared, x: usize, y: usize) -> [f32; 3] {
             ];
             let [kd, ks, shininess, _] = m.coef.map(|v| v as f64);
             let transparent = m.flags & TRANSPARENT != 0;
-            let cd = map_sample(p, lt.diffuse_map, n);
-            let cs = map_sample(p, o.spec_map, rv);
-            let ct = if transparent {
-                map_sample(p, lt.background_map, d)
-            } else {
-                Vec::new()
-            };
+            map_sample(p, lt.diffuse_map, n, cd);
+            map_sample(p, o.spec_map, rv, cs);
+            ct.clear();
+            if transparent {
+                map_sample(p, lt.background_map, d, ct);
+            }
             let (sun_d, sun_s) = if lt.has_sun != 0 {
                 let s = lt.sun.map(|v| v as f64);
                 let l = [s[0], s[1], s[2]];
@@ -216,14 +239,14 @@ fn pixel(p: &Prepared, x: usize, y: usize) -> [f32; 3] {
             let sun_spd = lt.layout[1];
             for i in 0..n_wl {
                 let e = sp(sun_spd, i);
-                let ld = expand(&cd, lt.spectra, i) + sun_d * e;
-                let ls = expand(&cs, lt.spectra, i) + sun_s * e;
+                let ld = expand(cd, lt.spectra, i) + sun_d * e;
+                let ls = expand(cs, lt.spectra, i) + sun_s * e;
                 let (fr, ft) = match film {
                     Some(f) => film_rt(f, i, cos_v, scale),
                     None => (ks, 1.0),
                 };
                 let l = if transparent {
-                    fr * ls + ft * expand(&ct, lt.spectra, i)
+                    fr * ls + ft * expand(ct, lt.spectra, i)
                 } else {
                     let rd = if m.flags & HAS_DIFFUSE != 0 {
                         sp(m.diffuse_offset, i)

@@ -86,6 +86,13 @@ fn taps(map: u32, dir: vec3<f32>) -> Taps {
     let m = maps[map];
     let w = m.y;
     let h = m.z;
+    var t: Taps;
+    // A uniform lighting's maps are one texel: no direction to look up (cpu.rs: map_sample).
+    if (w * h == 1u) {
+        t.idx = vec4<u32>(0u, 0u, 0u, 0u);
+        t.wt = vec4<f32>(1.0, 0.0, 0.0, 0.0);
+        return t;
+    }
     let u = 0.5 - atan2(dir.x, dir.z) / TWO_PI;
     let v = acos(clamp(dir.y, -1.0, 1.0)) / PI;
     let fx = u * f32(w) - 0.5;
@@ -99,7 +106,6 @@ fn taps(map: u32, dir: vec3<f32>) -> Taps {
     let x1 = (x0 + 1u) % w;
     let y0 = u32(y0f);
     let y1 = min(y0 + 1u, h - 1u);
-    var t: Taps;
     t.idx = vec4<u32>(y0 * w + x0, y0 * w + x1, y1 * w + x0, y1 * w + x1);
     t.wt = vec4<f32>((1.0 - tx) * (1.0 - ty), tx * (1.0 - ty), (1.0 - tx) * ty, tx * ty);
     return t;
