@@ -157,24 +157,56 @@ pub fn reference(
     .0)
 }
 
-/// Renders `scene` with `q` on `backend` (the fastest of `repeats` frames) and compares the
-/// image with `reference` in `space`.
+/// How many frames [`measure`] renders of each quadrature: rounds of one frame each, at
+/// least `at_least`, then more until `seconds` have passed, at most `at_most`.
+#[derive(Debug, Clone, Copy)]
+pub struct Rounds {
+    pub at_least: usize,
+    pub seconds: f64,
+    pub at_most: usize,
+}
+
+/// Renders `scene` with each of `qs` on `backend` and compares each image with `reference` in
+/// `space`. The frame times are to be compared: each round renders one frame of each in turn, so a slow spell of the machine (frames here scatter by
+/// tens of percent) slows them all alike rather than whichever happened to run then; each
+/// keeps its fastest frame.
 pub fn measure(
     scene: &Scene,
-    q: &Quadrature,
+    qs: &[&Quadrature],
     space: crate::colorimetry::RgbSpace,
     backend: Backend,
     gpu: Option<&Gpu>,
-    repeats: usize,
+    rounds: Rounds,
     reference: &Image,
-) -> Result<Measured> {
-    let p = Prepared::with_quadrature(scene, q, space)?;
-    let (img, frame_ms, frame_with_transfers_ms) = frame(&p, backend, gpu, repeats)?;
-    Ok(Measured {
-        frame_ms,
-        frame_with_transfers_ms,
-        comparison: compare(reference, &img, &space)?,
-    })
+) -> Result<Vec<Measured>> {
+    let prepared = qs
+        .iter()
+        .map(|q| Prepared::with_quadrature(scene, q, space))
+        .collect::<Result<Vec<_>>>()?;
+    let mut best = vec![(f64::INFINITY, None::<f64>, None::<Image>); qs.len()];
+    let start = Instant::now();
+    let mut done = 0;
+    while done < rounds.at_least.max(1)
+        || (done < rounds.at_most && start.elapsed().as_secs_f64() < rounds.seconds)
+    {
+        for (p, b) in prepared.iter().zip(&mut best) {
+            let (img, ms, total) = frame(p, backend, gpu, 1)?;
+            b.0 = b.0.min(ms);
+            b.1 = total.map(|t| b.1.map_or(t, |x: f64| x.min(t)));
+            b.2 = Some(img);
+        }
+        done += 1;
+    }
+    best.into_iter()
+        .map(|(frame_ms, frame_with_transfers_ms, img)| {
+            let img = img.expect("at least one round");
+            Ok(Measured {
+                frame_ms,
+                frame_with_transfers_ms,
+                comparison: compare(reference, &img, &space)?,
+            })
+        })
+        .collect()
 }
 
 /// A markdown table of one or more curves.

@@ -16,6 +16,14 @@ pub const LIGHTS: [&str; 7] = ["D65", "A", "FL2", "FL11", "hps", "lps", "LED-B3"
 /// The tolerances of the table.
 pub const TOLERANCES: [f64; 2] = [0.5, 0.1];
 
+/// Frames per quadrature: at least 5 rounds, more while a case's frames have taken under two
+/// seconds (the short frames, where a slow spell weighs most), at most 40.
+const ROUNDS: sweep::Rounds = sweep::Rounds {
+    at_least: 5,
+    seconds: 2.0,
+    at_most: 40,
+};
+
 /// The cases: (preset, light), each image `width` pixels wide.
 fn cases(quick: bool) -> Vec<(Preset, &'static str)> {
     if quick {
@@ -83,7 +91,15 @@ fn methods(scene: &Scene, quick: bool) -> anyhow::Result<Vec<Method>> {
 /// Measures every case.
 pub fn rows(quick: bool, gpu: Option<&Gpu>, cpu: bool) -> anyhow::Result<Vec<Row>> {
     let width = if quick { 24 } else { 96 };
-    let repeats = if quick { 1 } else { 5 };
+    let rounds = if quick {
+        sweep::Rounds {
+            at_least: 1,
+            seconds: 0.0,
+            at_most: 1,
+        }
+    } else {
+        ROUNDS
+    };
     let space = RgbSpace::SRGB;
     let mut rows = Vec::new();
     for (preset, light) in cases(quick) {
@@ -108,13 +124,20 @@ pub fn rows(quick: bool, gpu: Option<&Gpu>, cpu: bool) -> anyhow::Result<Vec<Row
             .iter()
             .map(|&(b, g)| sweep::reference(&scene, Observer::Cie1931, space, b, g))
             .collect::<Result<Vec<_>, _>>()?;
-        for m in methods(&scene, quick)? {
-            let mut measured = Vec::new();
-            for (&(b, g), reference) in backends.iter().zip(&references) {
-                let r = sweep::measure(&scene, &m.quadrature, space, b, g, repeats, reference)?;
-                measured.push((b, r));
-            }
-            let on = |b: Backend| measured.iter().find(|(x, _)| *x == b).map(|(_, r)| r);
+        let methods = methods(&scene, quick)?;
+        let qs: Vec<&Quadrature> = methods.iter().map(|m| &m.quadrature).collect();
+        // Per backend, every method's frames interleaved (sweep::measure), so that the
+        // speed-ups compare frames of the same spells of the machine.
+        let measured = backends
+            .iter()
+            .zip(&references)
+            .map(|(&(b, g), reference)| {
+                let m = sweep::measure(&scene, &qs, space, b, g, rounds, reference)?;
+                Ok((b, m))
+            })
+            .collect::<anyhow::Result<Vec<_>>>()?;
+        for (k, m) in methods.into_iter().enumerate() {
+            let on = |b: Backend| measured.iter().find(|(x, _)| *x == b).map(|(_, r)| &r[k]);
             // Errors from the CPU (the f64 reference renderer) when it ran, else the GPU.
             let judge = on(Backend::Cpu).or(on(Backend::Gpu));
             rows.push(Row {
