@@ -1,6 +1,6 @@
-//! `specmap bench`, quadrature section: every preset under every light, rendered with the
-//! uniform grid and the scene quadrature that `render --tolerance` chooses at each tolerance and
-//! with Meyer's rule; per quadrature the node count, the image's error against the 1 nm render
+//! `specmap bench`, quadrature section: every preset under every light and the ball under the
+//! repository's two photographs, rendered with the uniform grid and the scene quadrature that
+//! `render --tolerance` chooses at each tolerance and with Meyer's rule; per quadrature the node count, the image's error against the 1 nm render
 //! (CPU, max and mean CIEDE2000), and the frame time on both backends.
 
 use super::Row;
@@ -24,7 +24,10 @@ const ROUNDS: sweep::Rounds = sweep::Rounds {
     at_most: 40,
 };
 
-/// The cases: (preset, light), each image `width` pixels wide.
+/// The photographs the ball is also lit by (the repository's envmaps/, converted under D65).
+pub const MAPS: [&str; 2] = ["sunrise.exr", "forest.exr"];
+
+/// The cases: (preset, light or map), each image `width` pixels wide.
 fn cases(quick: bool) -> Vec<(Preset, &'static str)> {
     if quick {
         return vec![(Preset::Ball, "D65"), (Preset::Ball, "FL2")];
@@ -34,7 +37,23 @@ fn cases(quick: bool) -> Vec<(Preset, &'static str)> {
         out.extend(LIGHTS.iter().map(|&l| (p, l)));
     }
     out.push((Preset::Chart, "D65"));
+    out.extend(MAPS.iter().map(|&m| (Preset::Ball, m)));
     out
+}
+
+/// The preset under `light`, or lit by the map of that name in envmaps/.
+fn scene(preset: Preset, light: &str, width: usize) -> anyhow::Result<Scene> {
+    let (w, h) = preset.default_size();
+    let lighting = match MAPS.contains(&light) {
+        true => {
+            let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("envmaps")
+                .join(light);
+            Some(specmap::render::env::load(&path, "D65")?.0)
+        }
+        false => None,
+    };
+    Ok(preset.scene(width, width * h / w, light, lighting)?)
 }
 
 /// A quadrature to measure, and what it was chosen by.
@@ -103,8 +122,7 @@ pub fn rows(quick: bool, gpu: Option<&Gpu>, cpu: bool) -> anyhow::Result<Vec<Row
     let space = RgbSpace::SRGB;
     let mut rows = Vec::new();
     for (preset, light) in cases(quick) {
-        let (w, h) = preset.default_size();
-        let scene = preset.scene(width, width * h / w, light, None)?;
+        let scene = scene(preset, light, width)?;
         let case = match preset {
             Preset::Chart => format!("chart {}x{} (D65, A, lps)", scene.width, scene.height),
             _ => format!(
