@@ -167,9 +167,9 @@ pub struct Rounds {
 }
 
 /// Renders `scene` with each of `qs` on `backend` and compares each image with `reference` in
-/// `space`. The frame times are to be compared: each round renders one frame of each in turn, so a slow spell of the machine (frames here scatter by
-/// tens of percent) slows them all alike rather than whichever happened to run then; each
-/// keeps its fastest frame.
+/// `space`. The frame times are to be compared: each round renders one frame of each in turn,
+/// so a slow spell of the machine (frames here scatter by tens of percent) slows them all alike
+/// rather than whichever happened to run then; each keeps its fastest frame.
 pub fn measure(
     scene: &Scene,
     qs: &[&Quadrature],

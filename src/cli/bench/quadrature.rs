@@ -1,7 +1,8 @@
 //! `specmap bench`, quadrature section: every preset under every light and the ball under the
 //! repository's two photographs, rendered with the uniform grid and the scene quadrature that
-//! `render --tolerance` chooses at each tolerance and with Meyer's rule; per quadrature the node count, the image's error against the 1 nm render
-//! (CPU, max and mean CIEDE2000), and the frame time on both backends.
+//! `render --tolerance` chooses at each tolerance and with Meyer's rule; per quadrature the node
+//! count, the image's error against the 1 nm render (CPU, max and mean CIEDE2000), and the
+//! frame time on both backends.
 
 use super::Row;
 use specmap::colorimetry::{Observer, RgbSpace};
