@@ -93,31 +93,38 @@ pub fn hit(
 }
 
 /// A pixel's coefficients, kept between the pixels of a row so that none allocates: per map
-/// sampled, the nonzero coefficients as (index of the lighting's spectrum, value).
+/// sampled, the nonzero coefficients as (index of the lighting's spectrum, value), and the
+/// bilinear lookup they are taken from.
 #[derive(Default)]
 struct Scratch {
     diffuse: Vec<(usize, f64)>,
     specular: Vec<(usize, f64)>,
     behind: Vec<(usize, f64)>,
+    lookup: Vec<f64>,
 }
 
 /// The nonzero coefficients of `map` in direction `dir` into `out`. A uniform lighting's maps
-/// are one texel with one nonzero coefficient, so this skips its bilinear taps and the three
-/// zero terms of every wavelength's expansion.
-fn map_sample(p: &Prepared, map: u32, dir: [f64; 3], out: &mut Vec<(usize, f64)>) {
+/// hold one nonzero coefficient, so this skips the three zero terms of every wavelength's
+/// expansion.
+fn map_sample(
+    p: &Prepared,
+    map: u32,
+    dir: [f64; 3],
+    lookup: &mut Vec<f64>,
+    out: &mut Vec<(usize, f64)>,
+) {
     let [off, w, h, groups] = p.maps[map as usize];
     let off = off as usize;
     let (w, h, g) = (w as usize, h as usize, groups as usize);
-    let texels = &p.texels[off..off + w * h * g];
+    env::sample_into(&p.texels[off..off + w * h * g], w, h, g, dir, lookup);
     out.clear();
-    let mut push = |values: &mut dyn Iterator<Item = f64>| {
-        out.extend(values.enumerate().filter(|(_, c)| *c != 0.0));
-    };
-    if w * h == 1 {
-        push(&mut texels.iter().flatten().map(|&c| c as f64));
-    } else {
-        push(&mut env::sample(texels, w, h, g, dir).into_iter());
-    }
+    out.extend(
+        lookup
+            .iter()
+            .copied()
+            .enumerate()
+            .filter(|(_, c)| *c != 0.0),
+    );
 }
 
 /// The direction the background is seen in at pixel (x, y): a pinhole at the image centre
@@ -177,6 +184,7 @@ fn pixel(p: &Prepared, x: usize, y: usize, scratch: &mut Scratch) -> [f32; 3] {
         diffuse: cd,
         specular: cs,
         behind: ct,
+        lookup,
     } = scratch;
     let d = background_direction(p, x, y);
     let mut xyz = [0.0f64; 3];
@@ -191,7 +199,7 @@ fn pixel(p: &Prepared, x: usize, y: usize, scratch: &mut Scratch) -> [f32; 3] {
         None if p.params.flags & HIDE_BACKGROUND != 0 => {}
         None => {
             let lt = &p.lightings[p.params.background as usize];
-            map_sample(p, lt.background_map, d, ct);
+            map_sample(p, lt.background_map, d, lookup, ct);
             for i in 0..n_wl {
                 add(i, expand(ct, lt.spectra, i));
             }
@@ -208,11 +216,11 @@ fn pixel(p: &Prepared, x: usize, y: usize, scratch: &mut Scratch) -> [f32; 3] {
             ];
             let [kd, ks, shininess, _] = m.coef.map(|v| v as f64);
             let transparent = m.flags & TRANSPARENT != 0;
-            map_sample(p, lt.diffuse_map, n, cd);
-            map_sample(p, o.spec_map, rv, cs);
+            map_sample(p, lt.diffuse_map, n, lookup, cd);
+            map_sample(p, o.spec_map, rv, lookup, cs);
             ct.clear();
             if transparent {
-                map_sample(p, lt.background_map, d, ct);
+                map_sample(p, lt.background_map, d, lookup, ct);
             }
             let (sun_d, sun_s) = if lt.has_sun != 0 {
                 let s = lt.sun.map(|v| v as f64);

@@ -116,6 +116,10 @@ pub fn solid_angle(w: usize, h: usize, y: usize) -> f64 {
 
 /// The four texels around direction `dir` in a `w x h` lat-long and their bilinear weights.
 pub fn bilinear(w: usize, h: usize, dir: [f64; 3]) -> [(usize, f64); 4] {
+    // A one-texel map (every uniform lighting's) has no direction to look up.
+    if w * h == 1 {
+        return [(0, 1.0), (0, 0.0), (0, 0.0), (0, 0.0)];
+    }
     let u = 0.5 - dir[0].atan2(dir[2]) / (2.0 * PI);
     let v = dir[1].clamp(-1.0, 1.0).acos() / PI;
     let fx = u * w as f64 - 0.5;
@@ -139,7 +143,22 @@ pub fn bilinear(w: usize, h: usize, dir: [f64; 3]) -> [(usize, f64); 4] {
 /// Bilinear lookup of a `w x h` lat-long of `groups` groups per texel stored row-major in
 /// `texels`: `4 groups` coefficients.
 pub fn sample(texels: &[[f32; 4]], w: usize, h: usize, groups: usize, dir: [f64; 3]) -> Vec<f64> {
-    let mut out = vec![0.0; 4 * groups];
+    let mut out = Vec::new();
+    sample_into(texels, w, h, groups, dir, &mut out);
+    out
+}
+
+/// [`sample`] into `out` (resized to `4 groups`), for callers that reuse one buffer.
+pub fn sample_into(
+    texels: &[[f32; 4]],
+    w: usize,
+    h: usize,
+    groups: usize,
+    dir: [f64; 3],
+    out: &mut Vec<f64>,
+) {
+    out.clear();
+    out.resize(4 * groups, 0.0);
     for (t, wt) in bilinear(w, h, dir) {
         for (g, c) in texels[t * groups..(t + 1) * groups].iter().enumerate() {
             for k in 0..4 {
@@ -147,7 +166,6 @@ pub fn sample(texels: &[[f32; 4]], w: usize, h: usize, groups: usize, dir: [f64;
             }
         }
     }
-    out
 }
 
 /// What both renderers sample for one lighting: the environment itself (seen where rays miss

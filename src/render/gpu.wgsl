@@ -87,7 +87,7 @@ fn taps(map: u32, dir: vec3<f32>) -> Taps {
     let w = m.y;
     let h = m.z;
     var t: Taps;
-    // A uniform lighting's maps are one texel: no direction to look up (cpu.rs: map_sample).
+    // A uniform lighting's maps are one texel: no direction to look up (env.rs: bilinear).
     if (w * h == 1u) {
         t.idx = vec4<u32>(0u, 0u, 0u, 0u);
         t.wt = vec4<f32>(1.0, 0.0, 0.0, 0.0);
