@@ -416,11 +416,11 @@ impl Scene {
                 };
                 out.fit
                     .push(make(r.label.clone(), Vec::new(), b.env.max(1.0)));
+                let per_cycle = match r.tint {
+                    Some(_) => TINTED_SAMPLES_PER_CYCLE,
+                    None => SAMPLES_PER_CYCLE,
+                };
                 for o in &objects {
-                    let per_cycle = match r.tint {
-                        Some(_) => TINTED_SAMPLES_PER_CYCLE,
-                        None => SAMPLES_PER_CYCLE,
-                    };
                     object_stimuli(o, &r.label, per_cycle, &b, &make, &mut out)?;
                 }
             }

@@ -45,14 +45,13 @@ fn cases(quick: bool) -> Vec<(Preset, &'static str)> {
 /// The preset under `light`, or lit by the map of that name in envmaps/.
 fn scene(preset: Preset, light: &str, width: usize) -> anyhow::Result<Scene> {
     let (w, h) = preset.default_size();
-    let lighting = match MAPS.contains(&light) {
-        true => {
-            let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-                .join("envmaps")
-                .join(light);
-            Some(specmap::render::env::load(&path, "D65")?.0)
-        }
-        false => None,
+    let lighting = if MAPS.contains(&light) {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("envmaps")
+            .join(light);
+        Some(specmap::render::env::load(&path, "D65")?.0)
+    } else {
+        None
     };
     Ok(preset.scene(width, width * h / w, light, lighting)?)
 }
