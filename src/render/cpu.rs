@@ -15,10 +15,11 @@ use std::f64::consts::PI;
 pub fn render(p: &Prepared) -> Image {
     let (w, h) = (p.params.width as usize, p.params.height as usize);
     let mut pixels = vec![[0f32; 3]; w * h];
+    let constant = constant_maps(p);
     pixels.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
         let mut scratch = Scratch::default();
         for (x, out) in row.iter_mut().enumerate() {
-            *out = pixel(p, x, y, &mut scratch);
+            *out = pixel(p, &constant, x, y, &mut scratch);
         }
     });
     Image {
@@ -41,7 +42,12 @@ pub fn pixel_position(p: &Prepared, x: usize, y: usize) -> [f64; 2] {
 /// The nearest hit through pixel (x, y)'s centre, among the objects its row can hit.
 pub fn hit_pixel(p: &Prepared, x: usize, y: usize) -> Option<(usize, [f64; 3])> {
     let [px, py] = pixel_position(p, x, y);
-    hit(&p.objects, super::rows::row(&p.rows, y), px, py)
+    hit(&p.objects, candidates(p, x, y), px, py)
+}
+
+/// The objects pixel (x, y) can hit ([`super::rows`]).
+fn candidates(p: &Prepared, x: usize, y: usize) -> &[u32] {
+    super::rows::candidates(&p.rows, p.params.width as usize, x, y)
 }
 
 /// The nearest hit along the ray down −Z through (px, py) among the objects `candidates`
@@ -56,27 +62,29 @@ pub fn hit(
     let mut best_z = f64::NEG_INFINITY;
     for &k in candidates {
         let (i, o) = (k as usize, &objects[k as usize]);
-        let p0 = o.p0.map(|v| v as f64);
-        let p1 = o.p1.map(|v| v as f64);
+        // Fields read one by one, as each shape needs them: this loop runs for every
+        // candidate of every pixel.
+        let p0 = |c: usize| o.p0[c] as f64;
+        let p1 = |c: usize| o.p1[c] as f64;
         let found = match o.kind {
             SPHERE => {
-                let (dx, dy, r) = (px - p0[0], py - p0[1], p0[3]);
+                let (dx, dy, r) = (px - p0(0), py - p0(1), p0(3));
                 let q = r * r - dx * dx - dy * dy;
                 (q >= 0.0).then(|| {
                     let s = q.sqrt();
-                    (p0[2] + s, [dx / r, dy / r, s / r])
+                    (p0(2) + s, [dx / r, dy / r, s / r])
                 })
             }
             CYLINDER_X => {
-                let (dy, r) = (py - p0[1], p0[3]);
+                let (dy, r) = (py - p0(1), p0(3));
                 let q = r * r - dy * dy;
-                ((px - p0[0]).abs() <= p1[0] && q >= 0.0).then(|| {
+                ((px - p0(0)).abs() <= p1(0) && q >= 0.0).then(|| {
                     let s = q.sqrt();
-                    (p0[2] + s, [0.0, dy / r, s / r])
+                    (p0(2) + s, [0.0, dy / r, s / r])
                 })
             }
-            QUAD => ((px - p0[0]).abs() <= p1[0] && (py - p0[1]).abs() <= p1[1])
-                .then_some((p0[2], [0.0, 0.0, 1.0])),
+            QUAD => ((px - p0(0)).abs() <= p1(0) && (py - p0(1)).abs() <= p1(1))
+                .then_some((p0(2), [0.0, 0.0, 1.0])),
             _ => None,
         };
         if let Some((z, n)) = found {
@@ -97,22 +105,50 @@ pub fn hit(
 /// bilinear lookup they are taken from.
 #[derive(Default)]
 struct Scratch {
-    diffuse: Vec<(usize, f64)>,
-    specular: Vec<(usize, f64)>,
-    behind: Vec<(usize, f64)>,
+    diffuse: Terms,
+    specular: Terms,
+    behind: Terms,
     lookup: Vec<f64>,
 }
 
-/// The nonzero coefficients of `map` in direction `dir` into `out`. A uniform lighting's maps
-/// hold one nonzero coefficient, so this skips the three zero terms of every wavelength's
-/// expansion.
-fn map_sample(
+/// Nonzero coefficients of a map, as (index of the lighting's spectrum, value).
+type Terms = Vec<(usize, f64)>;
+
+/// Per map, its nonzero coefficients if it is one texel (every uniform lighting's maps are):
+/// the same in every direction, so taken once per frame instead of once per pixel.
+fn constant_maps(p: &Prepared) -> Vec<Option<Terms>> {
+    (0..p.maps.len())
+        .map(|m| {
+            let [_, w, h, _] = p.maps[m];
+            let mut terms = Vec::new();
+            (w * h == 1).then(|| {
+                sample_terms(p, m as u32, [0.0, 0.0, 1.0], &mut Vec::new(), &mut terms);
+                terms
+            })
+        })
+        .collect()
+}
+
+/// The nonzero coefficients of `map` in direction `dir`: `constant`'s if it has them, else
+/// looked up into `out`. A uniform lighting's maps hold one nonzero coefficient, so this
+/// skips the three zero terms of every wavelength's expansion.
+fn map_sample<'a>(
     p: &Prepared,
+    constant: &'a [Option<Terms>],
     map: u32,
     dir: [f64; 3],
     lookup: &mut Vec<f64>,
-    out: &mut Vec<(usize, f64)>,
-) {
+    out: &'a mut Terms,
+) -> &'a [(usize, f64)] {
+    if let Some(terms) = &constant[map as usize] {
+        return terms;
+    }
+    sample_terms(p, map, dir, lookup, out);
+    out
+}
+
+/// The nonzero coefficients of `map` in direction `dir` into `out`, by way of `lookup`.
+fn sample_terms(p: &Prepared, map: u32, dir: [f64; 3], lookup: &mut Vec<f64>, out: &mut Terms) {
     let [off, w, h, groups] = p.maps[map as usize];
     let off = off as usize;
     let (w, h, g) = (w as usize, h as usize, groups as usize);
@@ -174,7 +210,13 @@ fn film_rt(f: &CpuFilm, i: usize, cos_v: f64, scale: Option<f64>) -> (f64, f64) 
     (rt.r, rt.t)
 }
 
-fn pixel(p: &Prepared, x: usize, y: usize, scratch: &mut Scratch) -> [f32; 3] {
+fn pixel(
+    p: &Prepared,
+    constant: &[Option<Terms>],
+    x: usize,
+    y: usize,
+    scratch: &mut Scratch,
+) -> [f32; 3] {
     let n_wl = p.params.n_wl as usize;
     let sp = |off: u32, i: usize| p.spectra[off as usize + i] as f64;
     let expand = |c: &[(usize, f64)], off: u32, i: usize| -> f64 {
@@ -186,7 +228,7 @@ fn pixel(p: &Prepared, x: usize, y: usize, scratch: &mut Scratch) -> [f32; 3] {
         behind: ct,
         lookup,
     } = scratch;
-    let d = background_direction(p, x, y);
+    let d = || background_direction(p, x, y);
     let mut xyz = [0.0f64; 3];
     let cmf = p.params.cmf_offset as usize;
     let mut add = |i: usize, l: f64| {
@@ -195,11 +237,11 @@ fn pixel(p: &Prepared, x: usize, y: usize, scratch: &mut Scratch) -> [f32; 3] {
         }
     };
     let [px, py] = pixel_position(p, x, y);
-    match hit(&p.objects, super::rows::row(&p.rows, y), px, py) {
+    match hit(&p.objects, candidates(p, x, y), px, py) {
         None if p.params.flags & HIDE_BACKGROUND != 0 => {}
         None => {
             let lt = &p.lightings[p.params.background as usize];
-            map_sample(p, lt.background_map, d, lookup, ct);
+            let ct = map_sample(p, constant, lt.background_map, d(), lookup, ct);
             for i in 0..n_wl {
                 add(i, expand(ct, lt.spectra, i));
             }
@@ -216,25 +258,35 @@ fn pixel(p: &Prepared, x: usize, y: usize, scratch: &mut Scratch) -> [f32; 3] {
             ];
             let [kd, ks, shininess, _] = m.coef.map(|v| v as f64);
             let transparent = m.flags & TRANSPARENT != 0;
-            map_sample(p, lt.diffuse_map, n, lookup, cd);
-            map_sample(p, o.spec_map, rv, lookup, cs);
-            ct.clear();
-            if transparent {
-                map_sample(p, lt.background_map, d, lookup, ct);
-            }
-            let (sun_d, sun_s) = if lt.has_sun != 0 {
-                let s = lt.sun.map(|v| v as f64);
-                let l = [s[0], s[1], s[2]];
-                (
-                    s[3] * dot(n, l).max(0.0) / PI,
-                    s[3] * (shininess + 1.0) / (2.0 * PI) * lobe(dot(rv, l), shininess),
-                )
-            } else {
-                (0.0, 0.0)
-            };
             let film = (m.flags & HAS_FILM != 0)
                 .then(|| p.films[o.material as usize].as_ref())
                 .flatten();
+            // A matte surface (no film, ks = 0) reflects nothing specularly: its specular
+            // lighting is not looked up (most of the chart: the patches and the backdrop).
+            let specular = film.is_some() || ks != 0.0;
+            let cd = map_sample(p, constant, lt.diffuse_map, n, lookup, cd);
+            let cs = if specular {
+                map_sample(p, constant, o.spec_map, rv, lookup, cs)
+            } else {
+                &[]
+            };
+            let ct = if transparent {
+                map_sample(p, constant, lt.background_map, d(), lookup, ct)
+            } else {
+                &[]
+            };
+            let (sun_d, sun_s) = if lt.has_sun != 0 {
+                let s = lt.sun.map(|v| v as f64);
+                let l = [s[0], s[1], s[2]];
+                let s_lobe = if specular {
+                    s[3] * (shininess + 1.0) / (2.0 * PI) * lobe(dot(rv, l), shininess)
+                } else {
+                    0.0
+                };
+                (s[3] * dot(n, l).max(0.0) / PI, s_lobe)
+            } else {
+                (0.0, 0.0)
+            };
             let scale = (o.flags[0] != 0).then(|| {
                 let r = o.ramp.map(|v| v as f64);
                 let t = if r[1] == r[0] {

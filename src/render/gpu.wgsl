@@ -59,7 +59,8 @@ struct Lighting {
 @group(0) @binding(5) var<storage, read> maps: array<vec4<u32>>;
 @group(0) @binding(6) var<storage, read> texels: array<vec4<f32>>;
 @group(0) @binding(7) var<storage, read_write> out_rgb: array<vec4<f32>>;
-// Per pixel row, the objects it can hit (rows.rs): height + 1 offsets, then object indices.
+// Per pixel row and band of BAND pixels, the objects it can hit (rows.rs): height * bands + 1
+// offsets, then object indices.
 @group(0) @binding(8) var<storage, read> rows: array<u32>;
 
 const PI: f32 = 3.14159265358979;
@@ -73,6 +74,8 @@ const HAS_DIFFUSE: u32 = 4u;
 const HIDE_BACKGROUND: u32 = 1u;
 // The most groups of four coefficients a texel holds (prepare.rs: MAX_GROUPS).
 const MAX_GROUPS: u32 = 8u;
+// Pixels per band of the object index (rows.rs: BAND).
+const BAND: u32 = 8u;
 
 // ---- environment maps (env.rs: sample) -------------------------------------------------------
 
@@ -330,7 +333,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     var best = -1;
     var best_z = -3.4e38;
     var n = vec3<f32>(0.0, 0.0, 1.0);
-    for (var r = rows[y]; r < rows[y + 1u]; r = r + 1u) {
+    let tile = y * ((params.width + BAND - 1u) / BAND) + x / BAND;
+    for (var r = rows[tile]; r < rows[tile + 1u]; r = r + 1u) {
         let k = rows[r];
         let o = objects[k];
         var found = false;
@@ -395,8 +399,13 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         let has_diffuse = (mat.flags & HAS_DIFFUSE) != 0u;
         let groups = lt.shape.x;
         let sun_spd = lt.shape.y;
+        // A matte surface (no film, ks = 0) reflects nothing specularly (cpu.rs: specular).
+        let specular = has_film || ks != 0.0;
         let cd = sample_all(lt.diffuse_map, n, groups);
-        let cs = sample_all(o.spec_map, rv, groups);
+        var cs: Coeffs;
+        if (specular) {
+            cs = sample_all(o.spec_map, rv, groups);
+        }
         var ct: Coeffs;
         if (transparent) {
             ct = sample_all(lt.background_map, d, groups);
@@ -406,7 +415,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         if (lt.has_sun != 0u) {
             let l = lt.sun.xyz;
             sun_d = lt.sun.w * max(dot(n, l), 0.0) / PI;
-            sun_s = lt.sun.w * (shininess + 1.0) / TWO_PI * lobe(dot(rv, l), shininess);
+            if (specular) {
+                sun_s = lt.sun.w * (shininess + 1.0) / TWO_PI * lobe(dot(rv, l), shininess);
+            }
         }
         var scale = 1.0;
         if (o.flags.x != 0u) {
@@ -419,7 +430,10 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         for (var i = 0u; i < nw; i = i + 1u) {
             let e = spectra[sun_spd + i];
             let ld = expand(cd, groups, lt.spectra, i) + sun_d * e;
-            let ls = expand(cs, groups, lt.spectra, i) + sun_s * e;
+            var ls = 0.0;
+            if (specular) {
+                ls = expand(cs, groups, lt.spectra, i) + sun_s * e;
+            }
             var fr = ks;
             var ft = 1.0;
             if (has_film) {

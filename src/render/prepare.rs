@@ -117,7 +117,7 @@ pub struct Prepared {
     /// [offset in texels, width, height, 0].
     pub maps: Vec<[u32; 4]>,
     pub texels: Vec<[f32; 4]>,
-    /// Per pixel row, the objects it can hit ([`super::rows`]).
+    /// Per pixel row and band, the objects it can hit ([`super::rows`]).
     pub rows: Vec<u32>,
     pub wavelengths_nm: Vec<f64>,
     /// Per material (CPU only).
