@@ -523,16 +523,30 @@ fn quadrature_for(
         ),
         Some(QuadratureArg::Scene) | None => Family::Scene,
     };
-    // A scene's fit takes seconds (half a minute for the cylinders): say what is happening.
+    // A scene's fit takes seconds (half a minute for the cylinders, minutes for a thickness
+    // ramp under a photograph): say what is happening, stage by stage.
+    let doing = format!("wavelengths for CIEDE2000 {tolerance}");
     let spinner = std::io::stderr().is_terminal().then(|| {
         let b = indicatif::ProgressBar::new_spinner();
-        b.set_message(format!(
-            "choosing the wavelengths for CIEDE2000 {tolerance}"
-        ));
+        if let Ok(style) = indicatif::ProgressStyle::with_template("{spinner} {msg} [{elapsed}]") {
+            b.set_style(style);
+        }
+        b.set_message(doing.clone());
         b.enable_steady_tick(std::time::Duration::from_millis(120));
         b
     });
-    let s = scene.choose_quadrature(spectral.observer, spectral.space, family, &opts);
+    let report = |stage: &specmap::quadrature::progress::Stage| {
+        if let Some(b) = &spinner {
+            b.set_message(format!("{doing}: {stage}"));
+        }
+    };
+    let s = scene.choose_quadrature_reporting(
+        spectral.observer,
+        spectral.space,
+        family,
+        &opts,
+        &report,
+    );
     if let Some(b) = spinner {
         b.finish_and_clear();
     }

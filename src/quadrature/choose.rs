@@ -138,6 +138,16 @@ pub fn cheapest_uniform(
 
 /// Chooses the quadrature for `scene` at `opts` (see the module docs).
 pub fn select(scene: &Scene, family: Family, opts: &Options) -> Result<Selection> {
+    select_reporting(scene, family, opts, &super::progress::quiet)
+}
+
+/// [`select`], telling `report` the scene fit's stages ([`fit::fit_reporting`]).
+pub fn select_reporting(
+    scene: &Scene,
+    family: Family,
+    opts: &Options,
+    report: super::progress::Report,
+) -> Result<Selection> {
     fit::check_tolerance(opts.tolerance)?;
     let est = |s: &[Stimulus]| {
         Estimator::new(s, scene.observer, scene.start_nm, scene.end_nm, scene.white)
@@ -150,7 +160,7 @@ pub fn select(scene: &Scene, family: Family, opts: &Options) -> Result<Selection
     };
     let uniform = cheapest_uniform(&fit_set, held.as_ref(), opts.target())?;
     let fitted = match family {
-        Family::Scene => Some(fit::fit(&fit_set, held.as_ref(), opts)?),
+        Family::Scene => Some(fit::fit_reporting(&fit_set, held.as_ref(), opts, report)?),
         Family::Uniform => None,
     };
     let (quadrature, estimate_de2000, met, reason) = match &fitted {

@@ -23,6 +23,7 @@
 use super::estimate::{worst, Estimator};
 use super::lsq::{Metric, Minimax, Problem};
 use super::pnorm::{P_LEVELS, QUICK_LEVELS};
+use super::progress::{self, Report, Stage};
 use super::{Kind, Quadrature};
 use crate::error::{Error, Result};
 use crate::spectrum::Rule;
@@ -165,6 +166,16 @@ pub fn lines(est: &Estimator) -> Vec<usize> {
 /// Fits the quadrature (see the module docs). `held_out` checks what the fit did not see; a
 /// scene without continuous parameters (no film) may have none.
 pub fn fit(train: &Estimator, held_out: Option<&Estimator>, opts: &Options) -> Result<Choice> {
+    fit_reporting(train, held_out, opts, &progress::quiet)
+}
+
+/// [`fit`], telling `report` each stage as it starts.
+pub fn fit_reporting(
+    train: &Estimator,
+    held_out: Option<&Estimator>,
+    opts: &Options,
+    report: Report,
+) -> Result<Choice> {
     check_tolerance(opts.tolerance)?;
     if held_out.is_some_and(|h| train.grid != h.grid || train.observer != h.observer) {
         return Err(Error::invalid(
@@ -185,6 +196,10 @@ pub fn fit(train: &Estimator, held_out: Option<&Estimator>, opts: &Options) -> R
                 nodes: cols.len(),
                 fit_max: c.fit_max,
                 held_out_max: c.held_out_max,
+            });
+            report(&Stage::Greedy {
+                nodes: cols.len(),
+                max: c.max(),
             });
             // Beyond the target, a few more nodes give pruning room to choose from.
             let done = c.max() <= OVERSHOOT * target;
@@ -213,9 +228,12 @@ pub fn fit(train: &Estimator, held_out: Option<&Estimator>, opts: &Options) -> R
         Error::invalid("no node set gives finite colours: the lights have no visible energy")
     })?;
     if best.max() <= target {
-        best = prune(&p, held_out, best, target, &line_nodes)?;
-        best = reseed(&p, held_out, best, target, &line_nodes)?;
+        best = prune(&p, held_out, best, target, &line_nodes, report)?;
+        best = reseed(&p, held_out, best, target, &line_nodes, report)?;
     }
+    report(&Stage::Reweighing {
+        nodes: best.cols.len(),
+    });
     let best = reweigh(&p, held_out, best)?;
     let mut choice = best.into_choice(train, held_out, opts, &line_nodes);
     choice.tried = tried;
@@ -497,8 +515,13 @@ fn prune(
     mut best: Candidate,
     target: f64,
     fixed: &[usize],
+    report: Report,
 ) -> Result<Candidate> {
     'rounds: while best.cols.len() > 1 {
+        report(&Stage::Pruning {
+            nodes: best.cols.len(),
+            max: best.max(),
+        });
         let removals = judge_all(
             p,
             held_out,
@@ -612,6 +635,7 @@ fn reseed(
     mut best: Candidate,
     target: f64,
     fixed: &[usize],
+    report: Report,
 ) -> Result<Candidate> {
     while best.cols.len() > fixed.len() + 2 {
         let mut quick: Vec<(Vec<usize>, f64)> = seeds(p, fixed, best.cols.len() - 1)
@@ -630,10 +654,20 @@ fn reseed(
             break;
         }
         let mut found: Option<Candidate> = None;
-        for seed in judged.into_iter().take(SEEDS_DESCENDED) {
+        let of = judged.len().min(SEEDS_DESCENDED);
+        for (k, seed) in judged.into_iter().take(SEEDS_DESCENDED).enumerate() {
+            let stage = |search| Stage::Reseeding {
+                nodes: seed.cols.len(),
+                seed: k + 1,
+                of,
+                search,
+                kept: best.max(),
+            };
             // Two searches from the seed: a wide exchange ranked by a cheap score (pigments'
             // smooth landscapes) and a descent judging every move (films' abrupt ones).
+            report(&stage("exchange"));
             let wide = exchange(p, held_out, seed.clone(), fixed)?;
+            report(&stage("descent"));
             let fine = descend(p, held_out, seed, fixed)?;
             let c = reweigh(
                 p,
@@ -862,6 +896,33 @@ mod tests {
         };
         let c = fit(&fit_set, Some(&held), &starved).unwrap();
         assert!(!c.met && c.estimate_de2000 > opts.tolerance && c.quadrature.len() <= 2);
+    }
+
+    #[test]
+    fn a_fit_reports_its_stages_in_order_ending_with_the_nodes_it_keeps() {
+        let thicknesses: Vec<f64> = (0..=10).map(|i| 150.0 + 30.0 * i as f64).collect();
+        let fit_set = estimator(&films(&thicknesses, &[0.0, 45.0, 75.0]));
+        let stages = std::cell::RefCell::new(Vec::new());
+        let report = |s: &Stage| stages.borrow_mut().push(s.clone());
+        let c = fit_reporting(&fit_set, None, &Options::new(0.5).unwrap(), &report).unwrap();
+        let stages = stages.into_inner();
+        assert!(matches!(stages[0], Stage::Greedy { .. }), "{stages:?}");
+        assert_eq!(
+            stages.last(),
+            Some(&Stage::Reweighing {
+                nodes: c.quadrature.len()
+            })
+        );
+        // The greedy stage adds nodes one at a time, then pruning starts from as many or fewer.
+        let greedy: Vec<usize> = stages
+            .iter()
+            .filter_map(|s| match s {
+                Stage::Greedy { nodes, .. } => Some(*nodes),
+                _ => None,
+            })
+            .collect();
+        assert!(greedy.windows(2).all(|w| w[1] == w[0] + 1), "{greedy:?}");
+        assert!(stages.iter().any(|s| matches!(s, Stage::Pruning { .. })));
     }
 
     #[test]

@@ -18,6 +18,7 @@ pub mod fit;
 mod lsq;
 pub mod meyer;
 mod pnorm;
+pub mod progress;
 
 use crate::colorimetry::{Cmfs, Observer, Xyz};
 use crate::error::{Error, Result};

@@ -513,6 +513,19 @@ impl Scene {
         family: crate::quadrature::choose::Family,
         opts: &crate::quadrature::fit::Options,
     ) -> Result<crate::quadrature::choose::Selection> {
+        let quiet = &crate::quadrature::progress::quiet;
+        self.choose_quadrature_reporting(observer, space, family, opts, quiet)
+    }
+
+    /// [`Scene::choose_quadrature`], telling `report` the scene fit's stages.
+    pub fn choose_quadrature_reporting(
+        &self,
+        observer: crate::colorimetry::Observer,
+        space: crate::colorimetry::RgbSpace,
+        family: crate::quadrature::choose::Family,
+        opts: &crate::quadrature::fit::Options,
+        report: crate::quadrature::progress::Report,
+    ) -> Result<crate::quadrature::choose::Selection> {
         use crate::quadrature::{choose, estimate::White};
         let s = self.stimuli()?;
         let scene = choose::Scene {
@@ -523,6 +536,6 @@ impl Scene {
             end_nm: 780.0,
             white: White::Fixed(space.xyz_from_rgb([1.0; 3])),
         };
-        choose::select(&scene, family, opts)
+        choose::select_reporting(&scene, family, opts, report)
     }
 }

@@ -1,0 +1,80 @@
+//! Where a scene fit is: the stages of [`super::fit`] as values a caller can show while it
+//! waits (a fit over a thickness ramp under a photograph takes minutes).
+
+use std::fmt;
+
+/// A stage of the fit as it starts.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Stage {
+    /// The greedy stage has `nodes` nodes, whose largest error is `max`.
+    Greedy { nodes: usize, max: f64 },
+    /// Pruning, at `nodes` nodes whose largest error is `max`.
+    Pruning { nodes: usize, max: f64 },
+    /// Reseeding with `nodes` nodes: seed `seed` of `of` is being searched by `search`
+    /// ("exchange" or "descent"); `kept` is the largest error of the best set kept so far,
+    /// with one node more.
+    Reseeding {
+        nodes: usize,
+        seed: usize,
+        of: usize,
+        search: &'static str,
+        kept: f64,
+    },
+    /// The kept nodes' weights are solved once more.
+    Reweighing { nodes: usize },
+}
+
+impl fmt::Display for Stage {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Stage::Greedy { nodes, max } => {
+                write!(f, "adding nodes: {nodes} (largest error {max:.3})")
+            }
+            Stage::Pruning { nodes, max } => {
+                write!(f, "pruning: {nodes} nodes ({max:.3})")
+            }
+            Stage::Reseeding {
+                nodes,
+                seed,
+                of,
+                search,
+                kept,
+            } => write!(
+                f,
+                "{nodes} nodes: seed {seed}/{of}, {search} (kept {} nodes, {kept:.3})",
+                nodes + 1
+            ),
+            Stage::Reweighing { nodes } => write!(f, "final weights, {nodes} nodes"),
+        }
+    }
+}
+
+/// A caller's sink for stages; [`quiet`] ignores them.
+pub type Report<'a> = &'a dyn Fn(&Stage);
+
+/// A sink that ignores every stage.
+pub fn quiet(_: &Stage) {}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_stage_reads_as_what_the_fit_is_doing() {
+        let s = Stage::Reseeding {
+            nodes: 15,
+            seed: 2,
+            of: 3,
+            search: "descent",
+            kept: 0.3314,
+        };
+        assert_eq!(
+            s.to_string(),
+            "15 nodes: seed 2/3, descent (kept 16 nodes, 0.331)"
+        );
+        assert_eq!(
+            Stage::Greedy { nodes: 4, max: 1.5 }.to_string(),
+            "adding nodes: 4 (largest error 1.500)"
+        );
+    }
+}
