@@ -56,11 +56,13 @@ pub struct Stimuli {
 }
 
 /// A spectrum a lighting radiates: its normalising light, the basis reflectance it carries
-/// (None for `E`), and a label.
+/// (None for `E`), a label, and the brightest the environment radiates it (None: the
+/// environment's peak).
 struct Radiated {
     label: String,
     light: crate::spectrum::Tabulated,
     tint: Option<crate::spectrum::Tabulated>,
+    peak: Option<f64>,
 }
 
 fn radiated(l: &Lighting) -> Vec<Radiated> {
@@ -78,13 +80,15 @@ fn radiated(l: &Lighting) -> Vec<Radiated> {
                         label: format!("basis {} of {}", j + 1, l.label),
                         light: light.clone(),
                         tint: Some(b.clone()),
+                        peak: None,
                     });
                 }
                 // A texel radiates a mixture of the basis spectra, whose error the three alone
                 // do not bound (a photograph's ball erred 0.48 on the image against an
-                // estimate of 0.32 with the basis alone).
+                // estimate of 0.32 with the basis alone). Each mixture is taken as bright as
+                // the brightest texel it stands for, not the map's peak.
                 let mixtures = representative_spectra(&m.light, basis_reflectance, MIXTURES);
-                for (k, t) in mixtures.into_iter().enumerate() {
+                for (k, (t, cell_peak)) in mixtures.into_iter().enumerate() {
                     let peak = t.values().iter().copied().fold(0.0, f64::max);
                     let values = t.values().iter().map(|v| v / peak).collect();
                     let Ok(tint) =
@@ -96,6 +100,7 @@ fn radiated(l: &Lighting) -> Vec<Radiated> {
                         label: format!("texel mixture {} of {}", k + 1, l.label),
                         light: light.clone(),
                         tint: Some(tint),
+                        peak: Some(cell_peak),
                     });
                 }
             }
@@ -103,6 +108,7 @@ fn radiated(l: &Lighting) -> Vec<Radiated> {
                 label: e_label.clone(),
                 light: e_spd.clone(),
                 tint: None,
+                peak: None,
             });
         }
         LightSpectra::Own {
@@ -113,7 +119,7 @@ fn radiated(l: &Lighting) -> Vec<Radiated> {
             // A map's own spectra may go negative (principal components): what it radiates is
             // the spectra of its brightest and most different texels.
             if let Environment::Map(m) = &l.environment {
-                for (k, s) in representative_spectra(&m.light, spectra, REPRESENTATIVES)
+                for (k, (s, _)) in representative_spectra(&m.light, spectra, REPRESENTATIVES)
                     .into_iter()
                     .enumerate()
                 {
@@ -121,6 +127,7 @@ fn radiated(l: &Lighting) -> Vec<Radiated> {
                         label: format!("texel spectrum {} of {}", k + 1, l.label),
                         light: s,
                         tint: None,
+                        peak: None,
                     });
                 }
             }
@@ -129,6 +136,7 @@ fn radiated(l: &Lighting) -> Vec<Radiated> {
                     label: sun_label.clone(),
                     light: sun_spd.clone(),
                     tint: None,
+                    peak: None,
                 });
             }
         }
@@ -142,12 +150,14 @@ const REPRESENTATIVES: usize = 12;
 const MIXTURES: usize = 6;
 
 /// The spectra of a few texels of `map` that differ most (farthest-point sampling in the
-/// coefficients normalised to unit length, from the brightest texel).
+/// coefficients normalised to unit length, from the brightest texel), each with the brightest
+/// texel it stands for: of those nearer to it than to any other chosen one, the largest sum of
+/// absolute coefficients (as [`environment_peak`] measures the map).
 fn representative_spectra(
     map: &super::env::CoeffMap,
     spectra: &[crate::spectrum::Tabulated],
     count: usize,
-) -> Vec<crate::spectrum::Tabulated> {
+) -> Vec<(crate::spectrum::Tabulated, f64)> {
     let k = spectra.len();
     let texels: Vec<Vec<f64>> = (0..map.width * map.height)
         .map(|i| map.texel(i).take(k).map(|v| v as f64).collect())
@@ -185,13 +195,22 @@ fn representative_spectra(
             nearest[i] = nearest[i].min(dist(u, &unit[next]));
         }
     }
+    let mut cell_peak = vec![0.0f64; chosen.len()];
+    for (i, u) in unit.iter().enumerate() {
+        let cell = (0..chosen.len())
+            .min_by(|&a, &b| dist(u, &unit[chosen[a]]).total_cmp(&dist(u, &unit[chosen[b]])))
+            .unwrap_or(0);
+        let bright: f64 = map.texel(i).map(|v| (v as f64).abs()).sum();
+        cell_peak[cell] = cell_peak[cell].max(bright);
+    }
     let wl = spectra
         .first()
         .map(|s| s.wavelengths_nm().to_vec())
         .unwrap_or_default();
     chosen
         .into_iter()
-        .filter_map(|t| {
+        .zip(cell_peak)
+        .filter_map(|(t, peak)| {
             let c = &texels[t];
             let v: Vec<f64> = (0..wl.len())
                 .map(|i| {
@@ -204,6 +223,7 @@ fn representative_spectra(
             (norm(&v) > 0.0)
                 .then(|| crate::spectrum::Tabulated::new(wl.clone(), v).ok())
                 .flatten()
+                .map(|s| (s, peak))
         })
         .collect()
 }
@@ -407,6 +427,10 @@ impl Scene {
                 }
             }
             for r in radiated(lighting) {
+                let b = Brightness {
+                    env: r.peak.unwrap_or(b.env),
+                    ..b
+                };
                 let base: Vec<Factor> = r.tint.iter().cloned().map(Factor::Reflectance).collect();
                 let make = |name: String, mut f: Vec<Factor>, gain: f64| {
                     let mut all = base.clone();
@@ -537,5 +561,49 @@ impl Scene {
             white: White::Fixed(space.xyz_from_rgb([1.0; 3])),
         };
         choose::select_reporting(&scene, family, opts, report)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::env::CoeffMap;
+    use crate::spectrum::Tabulated;
+
+    #[test]
+    fn a_mixture_is_as_bright_as_the_brightest_texel_it_stands_for() {
+        // A bright red cap over a dim blue sky: the red mixture carries the cap's brightness,
+        // the blue one the sky's, not the map's peak.
+        let map = CoeffMap::from_fn(16, |d| {
+            if d[1] > 0.95 {
+                [10.0, 0.0, 0.0, 0.0]
+            } else {
+                [0.0, 0.0, 0.5 + 0.5 * d[1].abs() as f32, 0.0]
+            }
+        });
+        let flat = |v: f64| Tabulated::new(vec![380.0, 780.0], vec![v, v]).unwrap();
+        let basis = [flat(0.2), flat(0.3), flat(0.5)];
+        let reps = representative_spectra(&map, &basis, 2);
+        assert_eq!(reps.len(), 2);
+        let (red, blue) = (&reps[0], &reps[1]);
+        assert!(
+            (red.0.values()[0] - 10.0 * 0.2).abs() < 1e-6,
+            "{:?}",
+            red.0.values()
+        );
+        assert!(
+            (red.1 - 10.0).abs() < 1e-6 && blue.1 < 1.0 + 1e-6,
+            "{} {}",
+            red.1,
+            blue.1
+        );
+        let brightest_blue = (0..map.width * map.height)
+            .map(|i| map.texel(i).nth(2).unwrap() as f64)
+            .fold(0.0, f64::max);
+        assert!(
+            (blue.1 - brightest_blue).abs() < 1e-6,
+            "{} {brightest_blue}",
+            blue.1
+        );
     }
 }
