@@ -39,7 +39,7 @@ pub fn pixel_position(p: &Prepared, x: usize, y: usize) -> [f64; 2] {
     ]
 }
 
-/// The nearest hit through pixel (x, y)'s centre, among the objects its row can hit.
+/// The nearest hit through pixel (x, y)'s centre, among the objects its row and band can hit.
 pub fn hit_pixel(p: &Prepared, x: usize, y: usize) -> Option<(usize, [f64; 3])> {
     let [px, py] = pixel_position(p, x, y);
     hit(&p.objects, candidates(p, x, y), px, py)
@@ -62,29 +62,27 @@ pub fn hit(
     let mut best_z = f64::NEG_INFINITY;
     for &k in candidates {
         let (i, o) = (k as usize, &objects[k as usize]);
-        // Fields read one by one, as each shape needs them: this loop runs for every
-        // candidate of every pixel.
-        let p0 = |c: usize| o.p0[c] as f64;
-        let p1 = |c: usize| o.p1[c] as f64;
+        let p0 = o.p0.map(|v| v as f64);
+        let p1 = o.p1.map(|v| v as f64);
         let found = match o.kind {
             SPHERE => {
-                let (dx, dy, r) = (px - p0(0), py - p0(1), p0(3));
+                let (dx, dy, r) = (px - p0[0], py - p0[1], p0[3]);
                 let q = r * r - dx * dx - dy * dy;
                 (q >= 0.0).then(|| {
                     let s = q.sqrt();
-                    (p0(2) + s, [dx / r, dy / r, s / r])
+                    (p0[2] + s, [dx / r, dy / r, s / r])
                 })
             }
             CYLINDER_X => {
-                let (dy, r) = (py - p0(1), p0(3));
+                let (dy, r) = (py - p0[1], p0[3]);
                 let q = r * r - dy * dy;
-                ((px - p0(0)).abs() <= p1(0) && q >= 0.0).then(|| {
+                ((px - p0[0]).abs() <= p1[0] && q >= 0.0).then(|| {
                     let s = q.sqrt();
-                    (p0(2) + s, [0.0, dy / r, s / r])
+                    (p0[2] + s, [0.0, dy / r, s / r])
                 })
             }
-            QUAD => ((px - p0(0)).abs() <= p1(0) && (py - p0(1)).abs() <= p1(1))
-                .then_some((p0(2), [0.0, 0.0, 1.0])),
+            QUAD => ((px - p0[0]).abs() <= p1[0] && (py - p0[1]).abs() <= p1[1])
+                .then_some((p0[2], [0.0, 0.0, 1.0])),
             _ => None,
         };
         if let Some((z, n)) = found {
