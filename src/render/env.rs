@@ -158,12 +158,6 @@ pub fn sample_into(
     out: &mut Vec<f64>,
 ) {
     out.clear();
-    if w * h == 1 {
-        // One texel (every uniform lighting's): its coefficients as they are, without the
-        // three zero-weight taps of `bilinear`'s.
-        out.extend(texels[..groups].iter().flatten().map(|&c| c as f64));
-        return;
-    }
     out.resize(4 * groups, 0.0);
     for (t, wt) in bilinear(w, h, dir) {
         for (g, c) in texels[t * groups..(t + 1) * groups].iter().enumerate() {

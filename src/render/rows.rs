@@ -29,24 +29,38 @@ pub fn index(objects: &[GpuObject], params: &Params) -> Vec<u32> {
     let (w, h) = (params.width as usize, params.height as usize);
     let nb = bands(w);
     let pixel = params.view[2] as f64;
+    // Per object, its centre and reach on the image plane, the margin included.
+    let extents: Vec<([f64; 2], [f64; 2])> = objects
+        .iter()
+        .map(|o| {
+            let [rx, ry] = reach(o);
+            ([o.p0[0] as f64, o.p0[1] as f64], [rx + pixel, ry + pixel])
+        })
+        .collect();
     let mut out: Vec<u32> = vec![0; h * nb + 1];
+    let mut in_row = Vec::new();
     for y in 0..h {
         let py = row_y(params, y);
+        in_row.clear();
+        in_row.extend((0..objects.len()).filter(|&k| {
+            let ([_, cy], [_, ry]) = extents[k];
+            (py - cy).abs() <= ry
+        }));
         for b in 0..nb {
             out[y * nb + b] = out.len() as u32;
             let (x0, x1) = (
                 column_x(params, b * BAND),
                 column_x(params, ((b + 1) * BAND).min(w) - 1),
             );
-            for (k, o) in objects.iter().enumerate() {
-                let [rx, ry] = reach(o);
-                let (cx, cy) = (o.p0[0] as f64, o.p0[1] as f64);
-                let in_y = (py - cy).abs() <= ry + pixel;
-                let in_x = cx + rx + pixel >= x0 && cx - rx - pixel <= x1;
-                if in_y && in_x {
-                    out.push(k as u32);
-                }
-            }
+            out.extend(
+                in_row
+                    .iter()
+                    .filter(|&&k| {
+                        let ([cx, _], [rx, _]) = extents[k];
+                        cx + rx >= x0 && cx - rx <= x1
+                    })
+                    .map(|&k| k as u32),
+            );
         }
     }
     out[h * nb] = out.len() as u32;

@@ -198,8 +198,9 @@ fn representative_spectra(
     let mut cell_peak = vec![0.0f64; chosen.len()];
     for (i, u) in unit.iter().enumerate() {
         let cell = (0..chosen.len())
-            .min_by(|&a, &b| dist(u, &unit[chosen[a]]).total_cmp(&dist(u, &unit[chosen[b]])))
-            .unwrap_or(0);
+            .map(|a| (a, dist(u, &unit[chosen[a]])))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map_or(0, |(a, _)| a);
         let bright: f64 = map.texel(i).map(|v| (v as f64).abs()).sum();
         cell_peak[cell] = cell_peak[cell].max(bright);
     }
