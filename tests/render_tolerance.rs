@@ -127,3 +127,35 @@ fn a_uniform_choice_meets_the_tolerance_too() {
     assert!(c.met && c.scene.is_none());
     assert!(image_error(&s, &c.quadrature) <= TOL);
 }
+
+/// Known to fail (docs/quadrature.md, "What is not done"): under a map of its own spectra
+/// (a spectral EXR) the estimate does not bound the image. The renderer integrates a map's own
+/// spectra as they stand, while the stimuli take each texel relative to its own luminance on
+/// the quadrature (which hides a quadrature's error on that luminance: in a trial with more
+/// texels, the FL11 interior's image came out 20% too bright everywhere against an estimate of
+/// 0.36), at the map's coefficient peak rather than the texel's radiance, and only twelve
+/// texels of the raw map, not the mixtures its filtered forms hold. Measured on main: the
+/// estimates 0.20-0.28, the images 0.99-1.90. Run with
+/// `cargo test --release --test render_tolerance -- --ignored --nocapture`.
+#[test]
+#[ignore = "known failure: a spectral map's estimate does not bound its image"]
+fn a_maps_own_spectra_keep_the_image_within_the_tolerance() {
+    let mut misses = Vec::new();
+    for name in ["interior_fl11", "office_mixed", "yard_overcast"] {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join(format!("tests/data/truth/{name}.spectral.exr"));
+        let (lighting, _) = specmap::render::env::load(&path, "D65").unwrap();
+        let s = Preset::Ball.scene(32, 32, "D65", Some(lighting)).unwrap();
+        let c = choose(&s, Family::Scene);
+        let max = image_error(&s, &c.quadrature);
+        eprintln!(
+            "{name}: {} nodes, estimate {:.3}, image max {max:.3}",
+            c.quadrature.len(),
+            c.estimate_de2000
+        );
+        if !(c.met && max <= TOL) {
+            misses.push(format!("{name}: image {max:.3}"));
+        }
+    }
+    assert!(misses.is_empty(), "{misses:?}");
+}
