@@ -45,6 +45,9 @@ pub enum Surface {
 pub enum Factor {
     /// A tabulated reflectance factor (smooth data).
     Reflectance(Tabulated),
+    /// A tabulated emission (light data, interpolated linearly as a renderer samples a light):
+    /// a spectral map's texel, radiating over an equal-energy normaliser.
+    Emission(Tabulated),
     /// The film's reflectance at an incidence angle.
     FilmReflectance(Stack, Incidence),
     /// The power the film lets through to what lies under it, at an incidence angle.
@@ -56,6 +59,7 @@ impl Factor {
     fn values_at(&self, wavelengths_nm: &[f64]) -> Result<Vec<f64>> {
         match self {
             Factor::Reflectance(r) => Ok(sample(r, wavelengths_nm, Interpolation::SMOOTH)),
+            Factor::Emission(e) => Ok(sample(e, wavelengths_nm, Interpolation::LIGHT)),
             Factor::FilmReflectance(stack, incidence)
             | Factor::FilmTransmittance(stack, incidence) => {
                 let reflect = matches!(self, Factor::FilmReflectance(..));

@@ -5,7 +5,8 @@
 //! Per lighting, the spectra are those its coefficients expand with (`E` for a uniform or
 //! sky-and-ground environment and the sun; for a map also the three basis spectra `MCC_j * S`
 //! and the mixtures of them that its most different texels radiate, since a mixture's error is
-//! not bounded by its parts').
+//! not bounded by its parts'; for a map of its own spectra its most different texels, as
+//! emissions at their own luminance: [`texels`]).
 //! Per object lit by it:
 //! - opaque: the diffuse path `k_d R_d T_f(theta)` and the specular path `R_f(theta)` (or `k_s`
 //!   without a film) of Eq. 1, and for a glossy pigment without a film their sums (a pixel
@@ -24,6 +25,8 @@
 //! environment and the sun make it at its angle over the normals the shape has there (a sphere
 //! has every azimuth, a cylinder along X only normals in the YZ plane, a quad only +Z): the sun's
 //! `max(N.l, 0)` diffusely and its Phong lobe `(R_v.l)^n` in reflection.
+
+mod texels;
 
 use super::{Environment, LightSpectra, Lighting, Scene, Shape};
 use crate::error::Result;
@@ -55,17 +58,40 @@ pub struct Stimuli {
     pub held_out: Vec<Stimulus>,
 }
 
-/// A spectrum a lighting radiates: its normalising light, the basis reflectance it carries
-/// (None for `E`), a label, and the brightest the environment radiates it (None: the
-/// environment's peak).
+/// A spectrum a lighting radiates: its normalising light, what it carries over that light (an
+/// RGB map's basis reflectance, a spectral map's texel emission; None for `E`), a label, the
+/// brightest the environment radiates it (None: the environment's peak), how densely films
+/// are sampled under it, and whether it is only checked, not fitted.
 struct Radiated {
     label: String,
     light: crate::spectrum::Tabulated,
-    tint: Option<crate::spectrum::Tabulated>,
+    tint: Option<Factor>,
     peak: Option<f64>,
+    per_cycle: f64,
+    held_out: bool,
+    /// The sun's luminance in units of this spectrum's (1 but for a spectral map's texels).
+    sun_scale: f64,
 }
 
-fn radiated(l: &Lighting) -> Vec<Radiated> {
+impl Radiated {
+    fn fitted(label: String, light: crate::spectrum::Tabulated, tint: Option<Factor>) -> Self {
+        let per_cycle = match tint {
+            Some(_) => TINTED_SAMPLES_PER_CYCLE,
+            None => SAMPLES_PER_CYCLE,
+        };
+        Radiated {
+            label,
+            light,
+            tint,
+            peak: None,
+            per_cycle,
+            held_out: false,
+            sun_scale: 1.0,
+        }
+    }
+}
+
+fn radiated(l: &Lighting, shininess: &[f64], texels_fitted: usize) -> Result<Vec<Radiated>> {
     let mut out = Vec::new();
     match &l.spectra {
         LightSpectra::Paper {
@@ -76,12 +102,9 @@ fn radiated(l: &Lighting) -> Vec<Radiated> {
         } => {
             if let Environment::Map(m) = &l.environment {
                 for (j, b) in basis_reflectance.iter().enumerate() {
-                    out.push(Radiated {
-                        label: format!("basis {} of {}", j + 1, l.label),
-                        light: light.clone(),
-                        tint: Some(b.clone()),
-                        peak: None,
-                    });
+                    let label = format!("basis {} of {}", j + 1, l.label);
+                    let tint = Some(Factor::Reflectance(b.clone()));
+                    out.push(Radiated::fitted(label, light.clone(), tint));
                 }
                 // A texel radiates a mixture of the basis spectra, whose error the three alone
                 // do not bound (a photograph's ball erred 0.48 on the image against an
@@ -96,56 +119,38 @@ fn radiated(l: &Lighting) -> Vec<Radiated> {
                     else {
                         continue;
                     };
+                    let label = format!("texel mixture {} of {}", k + 1, l.label);
                     out.push(Radiated {
-                        label: format!("texel mixture {} of {}", k + 1, l.label),
-                        light: light.clone(),
-                        tint: Some(tint),
                         peak: Some(cell_peak),
+                        ..Radiated::fitted(label, light.clone(), Some(Factor::Reflectance(tint)))
                     });
                 }
             }
-            out.push(Radiated {
-                label: e_label.clone(),
-                light: e_spd.clone(),
-                tint: None,
-                peak: None,
-            });
+            out.push(Radiated::fitted(e_label.clone(), e_spd.clone(), None));
         }
         LightSpectra::Own {
             spectra,
             sun_spd,
             sun_label,
         } => {
-            // A map's own spectra may go negative (principal components): what it radiates is
-            // the spectra of its brightest and most different texels.
             if let Environment::Map(m) = &l.environment {
-                for (k, (s, _)) in representative_spectra(&m.light, spectra, REPRESENTATIVES)
-                    .into_iter()
-                    .enumerate()
-                {
-                    out.push(Radiated {
-                        label: format!("texel spectrum {} of {}", k + 1, l.label),
-                        light: s,
-                        tint: None,
-                        peak: None,
-                    });
-                }
+                out.extend(texels::texels(
+                    l,
+                    m,
+                    spectra,
+                    sun_spd,
+                    shininess,
+                    texels_fitted,
+                )?);
             }
             if l.sun.is_some() {
-                out.push(Radiated {
-                    label: sun_label.clone(),
-                    light: sun_spd.clone(),
-                    tint: None,
-                    peak: None,
-                });
+                out.push(texels::sun(sun_label, sun_spd)?);
             }
         }
     }
-    out
+    Ok(out)
 }
 
-/// How many texel spectra stand for a map of its own spectra.
-const REPRESENTATIVES: usize = 12;
 /// How many texel mixtures of the basis stand for an RGB map's colours.
 const MIXTURES: usize = 6;
 
@@ -411,6 +416,12 @@ fn glossy_pigment(
 impl Scene {
     /// The scene's stimuli (see the module docs).
     pub fn stimuli(&self) -> Result<Stimuli> {
+        self.stimuli_with(texels::FITTED)
+    }
+
+    /// The scene's stimuli, a spectral map's first `texels_fitted` texels fitted and the next
+    /// [`texels::CHECKED`] held out.
+    pub fn stimuli_with(&self, texels_fitted: usize) -> Result<Stimuli> {
         let mut out = Stimuli {
             fit: Vec::new(),
             held_out: Vec::new(),
@@ -427,27 +438,38 @@ impl Scene {
                     objects.push(o);
                 }
             }
-            for r in radiated(lighting) {
+            let mut shininess: Vec<f64> = Vec::new();
+            for o in &objects {
+                if !shininess.contains(&o.surface.shininess) {
+                    shininess.push(o.surface.shininess);
+                }
+            }
+            for r in radiated(lighting, &shininess, texels_fitted)? {
                 let b = Brightness {
                     env: r.peak.unwrap_or(b.env),
+                    sun: b.sun * r.sun_scale,
                     ..b
                 };
-                let base: Vec<Factor> = r.tint.iter().cloned().map(Factor::Reflectance).collect();
+                let base: Vec<Factor> = r.tint.iter().cloned().collect();
                 let make = |name: String, mut f: Vec<Factor>, gain: f64| {
                     let mut all = base.clone();
                     all.append(&mut f);
                     Stimulus::new(name, r.light.clone(), Seen::Product(all))
                         .with_gain(gain.max(1e-3))
                 };
-                out.fit
-                    .push(make(r.label.clone(), Vec::new(), b.env.max(1.0)));
-                let per_cycle = match r.tint {
-                    Some(_) => TINTED_SAMPLES_PER_CYCLE,
-                    None => SAMPLES_PER_CYCLE,
+                let mut these = Stimuli {
+                    fit: vec![make(r.label.clone(), Vec::new(), b.env.max(1.0))],
+                    held_out: Vec::new(),
                 };
                 for o in &objects {
-                    object_stimuli(o, &r.label, per_cycle, &b, &make, &mut out)?;
+                    object_stimuli(o, &r.label, r.per_cycle, &b, &make, &mut these)?;
                 }
+                if r.held_out {
+                    out.held_out.append(&mut these.fit);
+                } else {
+                    out.fit.append(&mut these.fit);
+                }
+                out.held_out.append(&mut these.held_out);
             }
         }
         Ok(out)
@@ -552,16 +574,30 @@ impl Scene {
         report: crate::quadrature::progress::Report,
     ) -> Result<crate::quadrature::choose::Selection> {
         use crate::quadrature::{choose, estimate::White};
-        let s = self.stimuli()?;
-        let scene = choose::Scene {
-            fit: &s.fit,
-            held_out: &s.held_out,
-            observer,
-            start_nm: 380.0,
-            end_nm: 780.0,
-            white: White::Fixed(space.xyz_from_rgb([1.0; 3])),
-        };
-        choose::select_reporting(&scene, family, opts, report)
+        let own_map = self.lightings.iter().any(|l| {
+            matches!(l.spectra, LightSpectra::Own { .. })
+                && matches!(l.environment, Environment::Map(_))
+        });
+        let mut fitted = texels::FITTED;
+        loop {
+            let s = self.stimuli_with(fitted)?;
+            let scene = choose::Scene {
+                fit: &s.fit,
+                held_out: &s.held_out,
+                observer,
+                start_nm: 380.0,
+                end_nm: 780.0,
+                white: White::Fixed(space.xyz_from_rgb([1.0; 3])),
+            };
+            let selection = choose::select_reporting(&scene, family, opts, report)?;
+            // A spectral map's held-out texels check that the fitted ones stand for the map;
+            // where the fit misses on them, they join the fit and the next ones are checked.
+            let missed = selection.scene.as_ref().is_some_and(|f| !f.met);
+            if !(own_map && missed && fitted < texels::MAX_FITTED) {
+                return Ok(selection);
+            }
+            fitted += texels::CHECKED / 2;
+        }
     }
 }
 
