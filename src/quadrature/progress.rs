@@ -22,6 +22,14 @@ pub enum Stage {
     },
     /// The kept nodes' weights are solved once more.
     Reweighing { nodes: usize },
+    /// Every texel of a spectral map checked: `nodes` nodes err `every` on them against
+    /// `fitted` on the fit's own stimuli, so the worst join the fit for round `round`.
+    Texels {
+        round: usize,
+        nodes: usize,
+        fitted: f64,
+        every: f64,
+    },
 }
 
 impl fmt::Display for Stage {
@@ -45,6 +53,16 @@ impl fmt::Display for Stage {
                 nodes + 1
             ),
             Stage::Reweighing { nodes } => write!(f, "final weights, {nodes} nodes"),
+            Stage::Texels {
+                round,
+                nodes,
+                fitted,
+                every,
+            } => write!(
+                f,
+                "every texel: {nodes} nodes err {every:.3} (the fit's stimuli {fitted:.3}); \
+                 refitting, round {round}"
+            ),
         }
     }
 }
@@ -75,6 +93,16 @@ mod tests {
         assert_eq!(
             Stage::Greedy { nodes: 4, max: 1.5 }.to_string(),
             "adding nodes: 4 (largest error 1.500)"
+        );
+        let t = Stage::Texels {
+            round: 1,
+            nodes: 12,
+            fitted: 0.256,
+            every: 0.567,
+        };
+        assert_eq!(
+            t.to_string(),
+            "every texel: 12 nodes err 0.567 (the fit's stimuli 0.256); refitting, round 1"
         );
     }
 }

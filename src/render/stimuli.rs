@@ -26,6 +26,8 @@
 //! has every azimuth, a cylinder along X only normals in the YZ plane, a quad only +Z): the sun's
 //! `max(N.l, 0)` diffusely and its Phong lobe `(R_v.l)^n` in reflection.
 
+mod coverage;
+mod selection;
 mod texels;
 
 use super::{Environment, LightSpectra, Lighting, Scene, Shape};
@@ -91,7 +93,12 @@ impl Radiated {
     }
 }
 
-fn radiated(l: &Lighting, shininess: &[f64], texels_fitted: usize) -> Result<Vec<Radiated>> {
+fn radiated(
+    l: &Lighting,
+    shininess: &[f64],
+    texels_fitted: usize,
+    added: &[&[f64]],
+) -> Result<Vec<Radiated>> {
     let mut out = Vec::new();
     match &l.spectra {
         LightSpectra::Paper {
@@ -141,6 +148,7 @@ fn radiated(l: &Lighting, shininess: &[f64], texels_fitted: usize) -> Result<Vec
                     sun_spd,
                     shininess,
                     texels_fitted,
+                    added,
                 )?);
             }
             if l.sun.is_some() {
@@ -413,38 +421,73 @@ fn glossy_pigment(
     Ok(())
 }
 
+/// Which texels stand for a spectral map: the first `fitted` of the most different fitted
+/// (the next [`texels::CHECKED`] held out), and per lighting, texels added to the fit because a
+/// chosen quadrature erred most on them ([`coverage`]).
+#[derive(Debug, Clone)]
+pub struct TexelChoice {
+    pub fitted: usize,
+    pub added: Vec<(usize, Vec<f64>)>,
+}
+
+impl Default for TexelChoice {
+    fn default() -> Self {
+        TexelChoice {
+            fitted: texels::FITTED,
+            added: Vec::new(),
+        }
+    }
+}
+
+/// The shininess values of `objects`, each once.
+fn shininess_of(objects: &[&super::Object]) -> Vec<f64> {
+    let mut out: Vec<f64> = Vec::new();
+    for o in objects {
+        if !out.contains(&o.surface.shininess) {
+            out.push(o.surface.shininess);
+        }
+    }
+    out
+}
+
 impl Scene {
-    /// The scene's stimuli (see the module docs).
-    pub fn stimuli(&self) -> Result<Stimuli> {
-        self.stimuli_with(texels::FITTED)
+    /// The objects lit by lighting `li`, those that look alike (same surface, same ramp) once:
+    /// they give the same stimuli.
+    fn distinct_objects(&self, li: usize) -> Vec<&super::Object> {
+        let mut objects: Vec<&super::Object> = Vec::new();
+        for o in self.objects.iter().filter(|o| o.lighting == li) {
+            if !objects
+                .iter()
+                .any(|p| p.surface == o.surface && p.ramp == o.ramp)
+            {
+                objects.push(o);
+            }
+        }
+        objects
     }
 
-    /// The scene's stimuli, a spectral map's first `texels_fitted` texels fitted and the next
-    /// [`texels::CHECKED`] held out.
-    pub fn stimuli_with(&self, texels_fitted: usize) -> Result<Stimuli> {
+    /// The scene's stimuli (see the module docs).
+    pub fn stimuli(&self) -> Result<Stimuli> {
+        self.stimuli_with(&TexelChoice::default())
+    }
+
+    /// The scene's stimuli, a spectral map's texels as `texels` says.
+    pub fn stimuli_with(&self, texels: &TexelChoice) -> Result<Stimuli> {
         let mut out = Stimuli {
             fit: Vec::new(),
             held_out: Vec::new(),
         };
         for (li, lighting) in self.lightings.iter().enumerate() {
             let b = Brightness::of(lighting);
-            // Objects that look alike (same surface, same ramp) give the same stimuli.
-            let mut objects: Vec<&super::Object> = Vec::new();
-            for o in self.objects.iter().filter(|o| o.lighting == li) {
-                if !objects
-                    .iter()
-                    .any(|p| p.surface == o.surface && p.ramp == o.ramp)
-                {
-                    objects.push(o);
-                }
-            }
-            let mut shininess: Vec<f64> = Vec::new();
-            for o in &objects {
-                if !shininess.contains(&o.surface.shininess) {
-                    shininess.push(o.surface.shininess);
-                }
-            }
-            for r in radiated(lighting, &shininess, texels_fitted)? {
+            let objects = self.distinct_objects(li);
+            let shininess = shininess_of(&objects);
+            let added: Vec<&[f64]> = texels
+                .added
+                .iter()
+                .filter(|(l, _)| *l == li)
+                .map(|(_, c)| c.as_slice())
+                .collect();
+            for r in radiated(lighting, &shininess, texels.fitted, &added)? {
                 let b = Brightness {
                     env: r.peak.unwrap_or(b.env),
                     sun: b.sun * r.sun_scale,
@@ -548,57 +591,6 @@ fn object_stimuli(
         }
     }
     Ok(())
-}
-
-impl Scene {
-    /// `--tolerance`: the cheapest quadrature over the scene's stimuli in the output `space`
-    /// (see [`crate::quadrature::choose`]).
-    pub fn choose_quadrature(
-        &self,
-        observer: crate::colorimetry::Observer,
-        space: crate::colorimetry::RgbSpace,
-        family: crate::quadrature::choose::Family,
-        opts: &crate::quadrature::fit::Options,
-    ) -> Result<crate::quadrature::choose::Selection> {
-        let quiet = &crate::quadrature::progress::quiet;
-        self.choose_quadrature_reporting(observer, space, family, opts, quiet)
-    }
-
-    /// [`Scene::choose_quadrature`], telling `report` the scene fit's stages.
-    pub fn choose_quadrature_reporting(
-        &self,
-        observer: crate::colorimetry::Observer,
-        space: crate::colorimetry::RgbSpace,
-        family: crate::quadrature::choose::Family,
-        opts: &crate::quadrature::fit::Options,
-        report: crate::quadrature::progress::Report,
-    ) -> Result<crate::quadrature::choose::Selection> {
-        use crate::quadrature::{choose, estimate::White};
-        let own_map = self.lightings.iter().any(|l| {
-            matches!(l.spectra, LightSpectra::Own { .. })
-                && matches!(l.environment, Environment::Map(_))
-        });
-        let mut fitted = texels::FITTED;
-        loop {
-            let s = self.stimuli_with(fitted)?;
-            let scene = choose::Scene {
-                fit: &s.fit,
-                held_out: &s.held_out,
-                observer,
-                start_nm: 380.0,
-                end_nm: 780.0,
-                white: White::Fixed(space.xyz_from_rgb([1.0; 3])),
-            };
-            let selection = choose::select_reporting(&scene, family, opts, report)?;
-            // A spectral map's held-out texels check that the fitted ones stand for the map;
-            // where the fit misses on them, they join the fit and the next ones are checked.
-            let missed = selection.scene.as_ref().is_some_and(|f| !f.met);
-            if !(own_map && missed && fitted < texels::MAX_FITTED) {
-                return Ok(selection);
-            }
-            fitted += texels::CHECKED / 2;
-        }
-    }
 }
 
 #[cfg(test)]

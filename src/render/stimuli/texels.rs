@@ -27,7 +27,7 @@ pub const CHECKED: usize = 16;
 pub const MAX_FITTED: usize = 32;
 
 /// The equal-energy light a map's own spectra radiate over.
-fn equal_energy() -> Result<Tabulated> {
+pub(super) fn equal_energy() -> Result<Tabulated> {
     Tabulated::new(vec![380.0, 780.0], vec![1.0, 1.0])
 }
 
@@ -68,10 +68,37 @@ pub(super) fn sun(label: &str, spd: &Tabulated) -> Result<Radiated> {
 }
 
 /// One texel a map stands for: its coefficients, luminance, and direction for the sampling.
-struct Candidate {
-    coefficients: Vec<f64>,
+pub(super) struct Candidate {
+    pub(super) coefficients: Vec<f64>,
     luminance: f64,
     unit: Vec<f64>,
+}
+
+/// Whether two texels radiate nearly the same spectrum (up to brightness).
+pub(super) fn alike(a: &Candidate, b: &Candidate) -> bool {
+    dist(&a.unit, &b.unit) < 1e-2
+}
+
+/// What the basis weighs for the sampling: each spectrum's luminance and RMS.
+fn weights(scale: &Scale, spectra: &[Tabulated]) -> (Vec<Vec<f64>>, Vec<f64>, Vec<f64>) {
+    let basis: Vec<Vec<f64>> = spectra.iter().map(|s| scale.at(s)).collect();
+    let luminance: Vec<f64> = basis.iter().map(|b| scale.luminance(b)).collect();
+    let rms: Vec<f64> = basis
+        .iter()
+        .map(|b| (b.iter().map(|v| v * v).sum::<f64>() / b.len() as f64).sqrt())
+        .collect();
+    (basis, luminance, rms)
+}
+
+/// Every texel of the maps the renderer samples for `l` (see [`candidates`]).
+pub(super) fn all_candidates(
+    l: &Lighting,
+    maps: &env::Maps,
+    spectra: &[Tabulated],
+    shininess: &[f64],
+) -> Result<Vec<Candidate>> {
+    let (_, luminance, rms) = weights(&Scale::new()?, spectra);
+    Ok(candidates(l, maps, &luminance, &rms, shininess))
 }
 
 /// Every texel of the maps the renderer samples for `l`, with a positive luminance.
@@ -155,18 +182,29 @@ pub(super) fn texels(
     sun_spd: &Tabulated,
     shininess: &[f64],
     fitted: usize,
+    added: &[&[f64]],
 ) -> Result<Vec<Radiated>> {
     let scale = Scale::new()?;
-    let basis: Vec<Vec<f64>> = spectra.iter().map(|s| scale.at(s)).collect();
-    let luminance: Vec<f64> = basis.iter().map(|b| scale.luminance(b)).collect();
-    let rms: Vec<f64> = basis
-        .iter()
-        .map(|b| (b.iter().map(|v| v * v).sum::<f64>() / b.len() as f64).sqrt())
-        .collect();
+    let (basis, luminance, rms) = weights(&scale, spectra);
     let sun_scale = scale.luminance(&scale.at(sun_spd)).max(0.0);
-    let c = candidates(l, maps, &luminance, &rms, shininess);
+    let mut c = candidates(l, maps, &luminance, &rms, shininess);
+    let mut chosen = farthest(&c, fitted + CHECKED);
+    let farthest_count = chosen.len();
+    // Texels added because a chosen quadrature erred most on them: fitted, at their own
+    // luminance, after the farthest ones.
+    for a in added {
+        let y: f64 = a.iter().zip(&luminance).map(|(c, y)| c * y).sum();
+        if y > 0.0 && y.is_finite() {
+            chosen.push((c.len(), y));
+            c.push(Candidate {
+                coefficients: a.to_vec(),
+                luminance: y,
+                unit: Vec::new(),
+            });
+        }
+    }
     let mut out = Vec::new();
-    for (n, (i, peak)) in farthest(&c, fitted + CHECKED).into_iter().enumerate() {
+    for (n, (i, peak)) in chosen.into_iter().enumerate() {
         let t = &c[i];
         let values: Vec<f64> = (0..scale.wavelengths.len())
             .map(|w| {
@@ -176,9 +214,14 @@ pub(super) fn texels(
                 v / t.luminance
             })
             .collect();
-        let held_out = n >= fitted;
+        let held_out = n >= fitted && n < farthest_count;
         out.push(Radiated {
-            label: format!("texel spectrum {} of {}", n + 1, l.label),
+            label: format!(
+                "texel spectrum {}{} of {}",
+                n + 1,
+                if n >= farthest_count { " (added)" } else { "" },
+                l.label
+            ),
             light: equal_energy()?,
             tint: Some(Factor::Emission(Tabulated::new(
                 scale.wavelengths.clone(),
@@ -198,14 +241,13 @@ pub(super) fn texels(
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use crate::render::{Environment, LightSpectra};
     use std::sync::Arc;
 
-    #[test]
-    fn texels_radiate_at_their_own_luminance_over_an_equal_energy_light() {
-        // A bright white cap (10 whites of a flat spectrum) over a dim sky of a blue ramp.
+    /// A bright white cap (10 whites of a flat spectrum) over a dim sky of a blue ramp.
+    pub(in crate::render::stimuli) fn cap_and_sky() -> (Lighting, env::Maps) {
         let map = CoeffMap::from_fn(16, |d| {
             if d[1] > 0.95 {
                 [10.0, 0.0, 0.0, 0.0]
@@ -229,13 +271,19 @@ mod tests {
             environment: Environment::Map(Arc::new(maps.clone())),
             sun: None,
         };
+        (l, maps)
+    }
+
+    #[test]
+    fn texels_radiate_at_their_own_luminance_over_an_equal_energy_light() {
+        let (l, maps) = cap_and_sky();
         let LightSpectra::Own {
             spectra, sun_spd, ..
         } = &l.spectra
         else {
             unreachable!()
         };
-        let r = texels(&l, &maps, spectra, sun_spd, &[200.0], 1).unwrap();
+        let r = texels(&l, &maps, spectra, sun_spd, &[200.0], 1, &[]).unwrap();
         assert!(r.len() >= 2, "{}", r.len());
         let scale = Scale::new().unwrap();
         for t in &r {

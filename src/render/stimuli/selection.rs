@@ -1,0 +1,171 @@
+//! `--tolerance` on a scene: the cheapest quadrature over its stimuli
+//! ([`crate::quadrature::choose`]), and under a map of its own spectra, rounds that make the
+//! texels the fit sees stand for the whole map: held-out texels join the fit where it misses on
+//! them, and then every texel of the map is checked ([`super::coverage`]); where the quadrature
+//! misses on some, the worst join the fit and the fit's margin narrows by the gap between its
+//! estimate and theirs. The estimate reported is the largest over every texel.
+
+use super::{coverage, texels, TexelChoice};
+use crate::colorimetry::{Observer, RgbSpace, Xyz};
+use crate::error::Result;
+use crate::quadrature::choose::{self, Family, Selection};
+use crate::quadrature::estimate::White;
+use crate::quadrature::fit::Options;
+use crate::quadrature::progress::{Report, Stage};
+use crate::quadrature::Kind;
+use crate::render::{Environment, LightSpectra, Scene};
+
+/// Texels added to the fit per round of [`coverage`], and the most rounds.
+const ADDED_PER_ROUND: usize = 8;
+const COVERAGE_ROUNDS: usize = 3;
+
+impl Scene {
+    /// `--tolerance`: the cheapest quadrature over the scene's stimuli in the output `space`
+    /// (see the module docs).
+    pub fn choose_quadrature(
+        &self,
+        observer: Observer,
+        space: RgbSpace,
+        family: Family,
+        opts: &Options,
+    ) -> Result<Selection> {
+        let quiet = &crate::quadrature::progress::quiet;
+        self.choose_quadrature_reporting(observer, space, family, opts, quiet)
+    }
+
+    /// [`Scene::choose_quadrature`], telling `report` the scene fit's stages.
+    pub fn choose_quadrature_reporting(
+        &self,
+        observer: Observer,
+        space: RgbSpace,
+        family: Family,
+        opts: &Options,
+        report: Report,
+    ) -> Result<Selection> {
+        let white = space.xyz_from_rgb([1.0; 3]);
+        let target = opts.target();
+        let own_map = self.lightings.iter().any(|l| {
+            matches!(l.spectra, LightSpectra::Own { .. })
+                && matches!(l.environment, Environment::Map(_))
+        });
+        let mut texels = TexelChoice::default();
+        let mut fit_opts = *opts;
+        let mut best: Option<Selection> = None;
+        // The uniform grid beside the choice is the one for the caller's margin.
+        let mut uniform = None;
+        for round in 0..=COVERAGE_ROUNDS {
+            let fitting = Fitting {
+                observer,
+                white,
+                family,
+                opts: &fit_opts,
+                report,
+            };
+            let mut selection = self.fit_texels(&fitting, &mut texels, own_map)?;
+            if !own_map {
+                return Ok(selection);
+            }
+            match &uniform {
+                None => uniform = Some(selection.uniform.clone()),
+                Some(u) => selection.uniform = u.clone(),
+            }
+            if selection.kind != Kind::Scene {
+                let e = selection.estimate_de2000;
+                return Ok(honest(selection, e, target, "", round));
+            }
+            let (max, misses) =
+                coverage::worst_texels(self, &selection.quadrature, white, ADDED_PER_ROUND)?;
+            let fitted = selection.estimate_de2000;
+            let every = max.max(fitted);
+            let through = misses
+                .first()
+                .map_or(String::new(), |m| format!("through {}", m.surface));
+            let selection = honest(selection, every, target, &through, round);
+            if every <= target {
+                return Ok(selection);
+            }
+            let nodes = selection.quadrature.len();
+            if best.as_ref().is_none_or(|b| every < b.estimate_de2000) {
+                best = Some(selection);
+            }
+            if round < COVERAGE_ROUNDS {
+                let round = round + 1;
+                report(&Stage::Texels {
+                    round,
+                    nodes,
+                    fitted,
+                    every,
+                });
+                fit_opts.margin *= (fitted / every).clamp(0.7, 0.9);
+                texels
+                    .added
+                    .extend(misses.into_iter().map(|m| (m.lighting, m.coefficients)));
+            }
+        }
+        Ok(best.expect("a round ran"))
+    }
+
+    /// One selection over the stimuli with `texels`; under a spectral map, while the fit misses
+    /// on the held-out texels, half of them join the fit (up to [`texels::MAX_FITTED`]).
+    fn fit_texels(
+        &self,
+        f: &Fitting,
+        texels: &mut TexelChoice,
+        own_map: bool,
+    ) -> Result<Selection> {
+        loop {
+            let s = self.stimuli_with(texels)?;
+            let scene = choose::Scene {
+                fit: &s.fit,
+                held_out: &s.held_out,
+                observer: f.observer,
+                start_nm: 380.0,
+                end_nm: 780.0,
+                white: White::Fixed(f.white),
+            };
+            let selection = choose::select_reporting(&scene, f.family, f.opts, f.report)?;
+            let missed = selection.scene.as_ref().is_some_and(|c| !c.met);
+            if !(own_map && missed && texels.fitted < texels::MAX_FITTED) {
+                return Ok(selection);
+            }
+            texels.fitted += texels::CHECKED / 2;
+        }
+    }
+}
+
+/// What one selection is made with.
+struct Fitting<'a> {
+    observer: Observer,
+    white: Xyz,
+    family: Family,
+    opts: &'a Options,
+    report: Report<'a>,
+}
+
+/// `s` with its estimate raised to `every` (the largest over every texel of the map, worst
+/// `through` a surface) after `refits` rounds, the caller's target, and a reason saying so.
+fn honest(mut s: Selection, every: f64, target: f64, through: &str, refits: usize) -> Selection {
+    s.estimate_de2000 = every;
+    s.target_de2000 = target;
+    s.met = every <= target;
+    if s.kind == Kind::Scene {
+        let n = s.quadrature.len();
+        let u = &s.uniform;
+        let uniform = if u.met {
+            format!("the cheapest uniform grid that meets it has {}", u.samples)
+        } else {
+            "no uniform grid meets it".into()
+        };
+        let refits = match refits {
+            0 => "no refit".to_string(),
+            1 => "1 refit".to_string(),
+            k => format!("{k} refits"),
+        };
+        s.reason = if s.met {
+            format!("{n} nodes meet the target on every texel of the map ({refits}); {uniform}")
+        } else {
+            format!("{n} nodes miss the target on the map's texels ({refits}), worst {every:.3} {through}")
+        };
+    }
+    s
+}
