@@ -190,32 +190,12 @@ fn representative_spectra(
     else {
         return Vec::new();
     };
-    let dist = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>();
-    let mut chosen = vec![first];
-    let mut nearest: Vec<f64> = unit.iter().map(|u| dist(u, &unit[first])).collect();
-    while chosen.len() < count.min(texels.len()) {
-        let (next, d) = nearest
-            .iter()
-            .enumerate()
-            .max_by(|a, b| a.1.total_cmp(b.1))
-            .map(|(i, d)| (i, *d))
-            .unwrap_or((0, 0.0));
-        if d <= 1e-12 {
-            break;
-        }
-        chosen.push(next);
-        for (i, u) in unit.iter().enumerate() {
-            nearest[i] = nearest[i].min(dist(u, &unit[next]));
-        }
-    }
+    let units: Vec<&[f64]> = unit.iter().map(Vec::as_slice).collect();
+    let (chosen, cell) = farthest_points(&units, first, count);
     let mut cell_peak = vec![0.0f64; chosen.len()];
-    for (i, u) in unit.iter().enumerate() {
-        let cell = (0..chosen.len())
-            .map(|a| (a, dist(u, &unit[chosen[a]])))
-            .min_by(|a, b| a.1.total_cmp(&b.1))
-            .map_or(0, |(a, _)| a);
+    for (i, &c) in cell.iter().enumerate() {
         let bright: f64 = map.texel(i).map(|v| (v as f64).abs()).sum();
-        cell_peak[cell] = cell_peak[cell].max(bright);
+        cell_peak[c] = cell_peak[c].max(bright);
     }
     let wl = spectra
         .first()
@@ -240,6 +220,38 @@ fn representative_spectra(
                 .map(|s| (s, peak))
         })
         .collect()
+}
+
+/// Squared Euclidean distance.
+fn dist(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum()
+}
+
+/// Farthest-point sampling of up to `count` of the vectors `unit`, from `first`, stopping where
+/// every vector lies on a chosen one: the chosen indices, and for each vector the position
+/// among them of the nearest (the first on a tie).
+fn farthest_points(unit: &[&[f64]], first: usize, count: usize) -> (Vec<usize>, Vec<usize>) {
+    let mut chosen = vec![first];
+    let mut nearest: Vec<(f64, usize)> = unit.iter().map(|u| (dist(u, unit[first]), 0)).collect();
+    while chosen.len() < count.min(unit.len()) {
+        let (next, d) = nearest
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1 .0.total_cmp(&b.1 .0))
+            .map_or((0, 0.0), |(i, d)| (i, d.0));
+        if d <= 1e-12 {
+            break;
+        }
+        let at = chosen.len();
+        chosen.push(next);
+        for (u, n) in unit.iter().zip(nearest.iter_mut()) {
+            let d = dist(u, unit[next]);
+            if d < n.0 {
+                *n = (d, at);
+            }
+        }
+    }
+    (chosen, nearest.into_iter().map(|n| n.1).collect())
 }
 
 /// The brightest the environment gets, in units of its spectra's whites.

@@ -79,11 +79,18 @@ fn templates(
     q: &Quadrature,
     reference: &Quadrature,
 ) -> Result<Vec<Template>> {
-    let one = |q: &Quadrature, f: &[f64]| -> Vec<[f64; 3]> {
+    // The basis at each quadrature's nodes, once for every surface.
+    let at = |q: &Quadrature| -> Vec<Vec<f64>> {
+        basis
+            .iter()
+            .map(|s| sample(s, q.nodes_nm(), Interpolation::LIGHT))
+            .collect()
+    };
+    let (basis_q, basis_1nm) = (at(q), at(reference));
+    let one = |q: &Quadrature, basis: &[Vec<f64>], f: &[f64]| -> Vec<[f64; 3]> {
         basis
             .iter()
             .map(|s| {
-                let s = sample(s, q.nodes_nm(), Interpolation::LIGHT);
                 let v: Vec<f64> = s.iter().zip(f).map(|(s, f)| s * f).collect();
                 xyz(q, &v)
             })
@@ -104,8 +111,8 @@ fn templates(
                 .collect();
             Ok(Template {
                 name: t.name.clone(),
-                on_q: one(q, &fq),
-                at_1nm: one(reference, &fr),
+                on_q: one(q, &basis_q, &fq),
+                at_1nm: one(reference, &basis_1nm, &fr),
             })
         })
         .collect()

@@ -9,7 +9,7 @@
 //! different (farthest-point sampling in the coefficients weighted by their spectra's RMS),
 //! each as bright as the brightest texel nearer to it than to any other chosen one.
 
-use super::{Radiated, SAMPLES_PER_CYCLE, TINTED_SAMPLES_PER_CYCLE};
+use super::{dist, farthest_points, Radiated, SAMPLES_PER_CYCLE, TINTED_SAMPLES_PER_CYCLE};
 use crate::colorimetry::Observer;
 use crate::error::Result;
 use crate::quadrature::Quadrature;
@@ -132,10 +132,6 @@ fn candidates(
     out
 }
 
-fn dist(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum()
-}
-
 /// Farthest-point sampling of `count` candidates from the brightest, and each one's cell peak
 /// (the largest luminance among the candidates nearest to it).
 fn farthest(c: &[Candidate], count: usize) -> Vec<(usize, f64)> {
@@ -143,32 +139,11 @@ fn farthest(c: &[Candidate], count: usize) -> Vec<(usize, f64)> {
     else {
         return Vec::new();
     };
-    let mut chosen = vec![first];
-    let mut nearest: Vec<(f64, usize)> = c
-        .iter()
-        .map(|x| (dist(&x.unit, &c[first].unit), 0))
-        .collect();
-    while chosen.len() < count.min(c.len()) {
-        let (next, d) = nearest
-            .iter()
-            .enumerate()
-            .max_by(|a, b| a.1 .0.total_cmp(&b.1 .0))
-            .map_or((0, 0.0), |(i, d)| (i, d.0));
-        if d <= 1e-12 {
-            break;
-        }
-        let at = chosen.len();
-        chosen.push(next);
-        for (x, n) in c.iter().zip(nearest.iter_mut()) {
-            let d = dist(&x.unit, &c[next].unit);
-            if d < n.0 {
-                *n = (d, at);
-            }
-        }
-    }
+    let units: Vec<&[f64]> = c.iter().map(|x| x.unit.as_slice()).collect();
+    let (chosen, cell) = farthest_points(&units, first, count);
     let mut peak: Vec<f64> = chosen.iter().map(|&i| c[i].luminance).collect();
-    for (x, n) in c.iter().zip(&nearest) {
-        peak[n.1] = peak[n.1].max(x.luminance);
+    for (x, &k) in c.iter().zip(&cell) {
+        peak[k] = peak[k].max(x.luminance);
     }
     chosen.into_iter().zip(peak).collect()
 }
