@@ -165,8 +165,14 @@ fn sample_terms(p: &Prepared, map: u32, dir: [f64; 3], lookup: &mut Vec<f64>, ou
 /// with the vertical field of view of `params.view.w` (its half angle's tangent), looking
 /// down −Z; straight down −Z when that is 0.
 pub fn background_direction(p: &Prepared, x: usize, y: usize) -> [f64; 3] {
-    let t = p.params.view[3] as f64;
-    let (w, h) = (p.params.width as f64, p.params.height as f64);
+    let (w, h) = (p.params.width as usize, p.params.height as usize);
+    pinhole_direction(p.params.view[3] as f64, w, h, x, y)
+}
+
+/// [`background_direction`] for a `width x height` image whose vertical half field of view
+/// has tangent `t` (f32, as the renderers are handed it).
+pub fn pinhole_direction(t: f64, width: usize, height: usize, x: usize, y: usize) -> [f64; 3] {
+    let (w, h) = (width as f64, height as f64);
     let u = (x as f64 + 0.5 - 0.5 * w) / (0.5 * h) * t;
     let v = -(y as f64 + 0.5 - 0.5 * h) / (0.5 * h) * t;
     let n = (u * u + v * v + 1.0).sqrt();

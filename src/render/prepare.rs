@@ -125,6 +125,14 @@ pub struct Prepared {
 }
 
 /// Y of values at the nodes, relative to an equal-energy spectrum: `sum w_y s / sum w_y`.
+/// The tangent of the background's vertical half field of view (0: straight down -Z).
+pub fn pinhole_tangent(backdrop: Backdrop) -> f32 {
+    match backdrop {
+        Backdrop::Environment { fov_deg } => (0.5 * fov_deg.to_radians()).tan() as f32,
+        _ => 0.0,
+    }
+}
+
 fn luminance(s: &[f64], q: &Quadrature) -> f64 {
     q.integrate(s)[1] / q.sum()[1]
 }
@@ -446,10 +454,7 @@ impl Prepared {
                 scene.view.center[0] as f32,
                 scene.view.center[1] as f32,
                 pixel as f32,
-                match scene.backdrop {
-                    Backdrop::Environment { fov_deg } => (0.5 * fov_deg.to_radians()).tan() as f32,
-                    _ => 0.0,
-                },
+                pinhole_tangent(scene.backdrop),
             ],
             rgb: [row(0), row(1), row(2)],
         };

@@ -5,8 +5,9 @@
 //! Per lighting, the spectra are those its coefficients expand with (`E` for a uniform or
 //! sky-and-ground environment and the sun; for a map also the three basis spectra `MCC_j * S`
 //! and the mixtures of them that its most different texels radiate, since a mixture's error is
-//! not bounded by its parts'; for a map of its own spectra its most different texels, as
-//! emissions at their own luminance: [`texels`]).
+//! not bounded by its parts', and those of the texels the check on every texel found worst
+//! ([`expansion`]); for a map of its own spectra its most different texels, as emissions at
+//! their own luminance: [`texels`]).
 //! Per object lit by it:
 //! - opaque: the diffuse path `k_d R_d T_f(theta)` and the specular path `R_f(theta)` (or `k_s`
 //!   without a film) of Eq. 1, and for a glossy pigment without a film their sums (a pixel
@@ -27,8 +28,10 @@
 //! `max(N.l, 0)` diffusely and its Phong lobe `(R_v.l)^n` in reflection.
 
 mod coverage;
+mod expansion;
 mod selection;
 mod texels;
+mod visible;
 
 use super::{Environment, LightSpectra, Lighting, Scene, Shape};
 use crate::error::Result;
@@ -55,9 +58,24 @@ const HIGHLIGHT_HELD_OUT: [f64; 4] = [-2.25, -0.75, 0.75, 2.25];
 
 /// The fit set and the held-out set.
 #[derive(Debug, Clone)]
-pub struct Stimuli {
-    pub fit: Vec<Stimulus>,
-    pub held_out: Vec<Stimulus>,
+pub struct Sets<T> {
+    pub fit: Vec<T>,
+    pub held_out: Vec<T>,
+}
+
+/// The scene's stimuli: fitted, and held out.
+pub type Stimuli = Sets<Stimulus>;
+
+/// Which of a lighting's maps the renderer reads for a path: the map seen behind the objects
+/// (the environment seen directly, a transparent object's transmission), the diffuse map, the
+/// specular map of the object's shininess, or the last two (a glossy pigment's pixels show its
+/// colour and part of its highlight).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Path {
+    Seen,
+    Diffuse,
+    Specular,
+    Glossy,
 }
 
 /// A spectrum a lighting radiates: its normalising light, what it carries over that light (an
@@ -95,6 +113,7 @@ impl Radiated {
 
 fn radiated(
     l: &Lighting,
+    seen: Option<&super::env::CoeffMap>,
     shininess: &[f64],
     texels_fitted: usize,
     added: &[&[f64]],
@@ -132,6 +151,7 @@ fn radiated(
                         ..Radiated::fitted(label, light.clone(), Some(Factor::Reflectance(tint)))
                     });
                 }
+                out.extend(expansion::paper_texels(l, basis_reflectance, light, added)?);
             }
             out.push(Radiated::fitted(e_label.clone(), e_spd.clone(), None));
         }
@@ -140,10 +160,14 @@ fn radiated(
             sun_spd,
             sun_label,
         } => {
-            if let Environment::Map(m) = &l.environment {
+            if let (Environment::Map(m), Some(seen)) = (&l.environment, seen) {
+                let shown = texels::Shown {
+                    light: &m.light,
+                    seen,
+                };
                 out.extend(texels::texels(
                     l,
-                    m,
+                    &shown,
                     spectra,
                     sun_spd,
                     shininess,
@@ -411,12 +435,12 @@ const GLOSS_HELD_OUT: [f64; 4] = [0.1, 0.25, 0.5, 0.85];
 /// weighs errors differently (the red plastic sphere of the chart erred 23% above an estimate
 /// that took the two apart). Each mixture is the reflectance `(a R_d + b) / (a + b)` at gain
 /// `a + b`, with `a` the brightest diffuse lighting and `b` a share of the brightest highlight.
-fn glossy_pigment(
+fn glossy_pigment<T>(
     rd: &crate::spectrum::Tabulated,
     diffuse: f64,
     highlight: f64,
-    make: &dyn Fn(String, Vec<Factor>, f64) -> Stimulus,
-    out: &mut Stimuli,
+    make: &dyn Fn(String, Vec<Factor>, f64, Path) -> T,
+    out: &mut Sets<T>,
 ) -> Result<()> {
     for (set, shares) in [
         (&mut out.fit, &GLOSS_FIT[..]),
@@ -427,7 +451,12 @@ fn glossy_pigment(
             let values = rd.values().iter().map(|v| (a * v + b) / (a + b)).collect();
             let mixed = crate::spectrum::Tabulated::new(rd.wavelengths_nm().to_vec(), values)?;
             let name = format!("with {t} of its highlight");
-            set.push(make(name, vec![Factor::Reflectance(mixed)], a + b));
+            set.push(make(
+                name,
+                vec![Factor::Reflectance(mixed)],
+                a + b,
+                Path::Glossy,
+            ));
         }
     }
     Ok(())
@@ -499,21 +528,27 @@ impl Scene {
                 .filter(|(l, _)| *l == li)
                 .map(|(_, c)| c.as_slice())
                 .collect();
-            for r in radiated(lighting, &shininess, texels.fitted, &added)? {
+            let seen = self.visible_seen(li);
+            for r in radiated(lighting, seen.as_ref(), &shininess, texels.fitted, &added)? {
                 let b = Brightness {
                     env: r.peak.unwrap_or(b.env),
                     sun: b.sun * r.sun_scale,
                     ..b
                 };
                 let base: Vec<Factor> = r.tint.iter().cloned().collect();
-                let make = |name: String, mut f: Vec<Factor>, gain: f64| {
+                let make = |name: String, mut f: Vec<Factor>, gain: f64, _: Path| {
                     let mut all = base.clone();
                     all.append(&mut f);
                     Stimulus::new(name, r.light.clone(), Seen::Product(all))
                         .with_gain(gain.max(1e-3))
                 };
                 let mut these = Stimuli {
-                    fit: vec![make(r.label.clone(), Vec::new(), b.env.max(1.0))],
+                    fit: vec![make(
+                        r.label.clone(),
+                        Vec::new(),
+                        b.env.max(1.0),
+                        Path::Seen,
+                    )],
                     held_out: Vec::new(),
                 };
                 for o in &objects {
@@ -531,14 +566,15 @@ impl Scene {
     }
 }
 
-/// One object's stimuli under one radiated spectrum.
-fn object_stimuli(
+/// One object's stimuli under one radiated spectrum, each made by `make` from its name,
+/// factors, gain and the path it takes.
+fn object_stimuli<T>(
     o: &super::Object,
     label: &str,
     per_cycle: f64,
     b: &Brightness,
-    make: &dyn Fn(String, Vec<Factor>, f64) -> Stimulus,
-    out: &mut Stimuli,
+    make: &dyn Fn(String, Vec<Factor>, f64, Path) -> T,
+    out: &mut Sets<T>,
 ) -> Result<()> {
     let s = &o.surface;
     let (fit_deg, held_deg) = angles(&o.shape, b, s.shininess);
@@ -550,20 +586,26 @@ fn object_stimuli(
         if let Some(rd) = pigment {
             let gain = brightest(&|d| b.diffuse(shape, s.kd, d));
             let f = vec![Factor::Reflectance(rd.clone())];
-            out.fit
-                .push(make(format!("{} under {label}", s.label), f, gain));
+            out.fit.push(make(
+                format!("{} under {label}", s.label),
+                f,
+                gain,
+                Path::Diffuse,
+            ));
         }
         if s.ks > 0.0 {
             let gain = s.ks * brightest(&|d| b.specular(shape, s.shininess, d));
             let name = format!("{} highlight under {label}", s.label);
-            out.fit.push(make(name, Vec::new(), gain));
+            out.fit.push(make(name, Vec::new(), gain, Path::Specular));
             if let Some(rd) = pigment {
                 let diffuse = brightest(&|d| b.diffuse(shape, s.kd, d));
                 glossy_pigment(
                     rd,
                     diffuse,
                     gain,
-                    &|name, f, gain| make(format!("{} {name} under {label}", s.label), f, gain),
+                    &|name, f, gain, path| {
+                        make(format!("{} {name} under {label}", s.label), f, gain, path)
+                    },
                     out,
                 )?;
             }
@@ -588,15 +630,17 @@ fn object_stimuli(
                     what("reflected"),
                     vec![r],
                     b.specular(shape, s.shininess, deg),
+                    Path::Specular,
                 ));
                 if s.transparent {
-                    set.push(make(what("transmitted"), vec![t], b.env));
+                    set.push(make(what("transmitted"), vec![t], b.env, Path::Seen));
                 } else if let Some(rd) = pigment {
                     let f = vec![Factor::Reflectance(rd.clone()), t];
                     set.push(make(
                         what("over its pigment"),
                         f,
                         b.diffuse(shape, s.kd, deg),
+                        Path::Diffuse,
                     ));
                 }
             }

@@ -1,9 +1,10 @@
 //! `--tolerance` on a scene: the cheapest quadrature over its stimuli
-//! ([`crate::quadrature::choose`]), and under a map of its own spectra, rounds that make the
-//! texels the fit sees stand for the whole map: held-out texels join the fit where it misses on
-//! them, and then every texel of the map is checked ([`super::coverage`]); where the quadrature
-//! misses on some, the worst join the fit and the fit's margin narrows by the gap between its
-//! estimate and theirs. The estimate reported is the largest over every texel.
+//! ([`crate::quadrature::choose`]), and under a map (RGB or of its own spectra), rounds that
+//! make the texels the fit sees stand for the whole map: under a map of its own spectra,
+//! held-out texels join the fit where it misses on them; then every texel of the map the image
+//! can show is checked ([`super::coverage`]); where the quadrature misses on some, the worst
+//! join the fit and the fit's margin narrows by the gap between its estimate and theirs. The
+//! estimate reported is the largest over every texel.
 
 use super::{coverage, texels, TexelChoice};
 use crate::colorimetry::{Observer, RgbSpace, Xyz};
@@ -44,10 +45,13 @@ impl Scene {
     ) -> Result<Selection> {
         let white = space.xyz_from_rgb([1.0; 3]);
         let target = opts.target();
-        let own_map = self.lightings.iter().any(|l| {
-            matches!(l.spectra, LightSpectra::Own { .. })
-                && matches!(l.environment, Environment::Map(_))
-        });
+        let map = |own: bool| {
+            self.lightings.iter().any(|l| {
+                matches!(l.environment, Environment::Map(_))
+                    && (!own || matches!(l.spectra, LightSpectra::Own { .. }))
+            })
+        };
+        let (any_map, own_map) = (map(false), map(true));
         let mut texels = TexelChoice::default();
         let mut fit_opts = *opts;
         let mut best: Option<Selection> = None;
@@ -62,7 +66,7 @@ impl Scene {
                 report,
             };
             let mut selection = self.fit_texels(&fitting, &mut texels, own_map)?;
-            if !own_map {
+            if !any_map {
                 return Ok(selection);
             }
             match &uniform {
@@ -142,8 +146,9 @@ struct Fitting<'a> {
     report: Report<'a>,
 }
 
-/// `s` with its estimate raised to `every` (the largest over every texel of the map, worst
-/// `through` a surface) after `refits` rounds, the caller's target, and a reason saying so.
+/// `s` with its estimate raised to `every` (the largest over every texel the image can show,
+/// worst `through` a surface) after `refits` rounds, the caller's target, and a reason saying
+/// so.
 fn honest(mut s: Selection, every: f64, target: f64, through: &str, refits: usize) -> Selection {
     s.estimate_de2000 = every;
     s.target_de2000 = target;
@@ -162,7 +167,9 @@ fn honest(mut s: Selection, every: f64, target: f64, through: &str, refits: usiz
             k => format!("{k} refits"),
         };
         s.reason = if s.met {
-            format!("{n} nodes meet the target on every texel of the map ({refits}); {uniform}")
+            format!(
+                "{n} nodes meet the target on every texel the image can show ({refits}); {uniform}"
+            )
         } else {
             format!("{n} nodes miss the target on the map's texels ({refits}), worst {every:.3} {through}")
         };

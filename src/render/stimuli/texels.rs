@@ -67,11 +67,24 @@ pub(super) fn sun(label: &str, spd: &Tabulated) -> Result<Radiated> {
     })
 }
 
-/// One texel a map stands for: its coefficients, luminance, and direction for the sampling.
+/// One texel a map stands for: its coefficients, luminance, direction for the sampling, and
+/// the map it is read from.
 pub(super) struct Candidate {
     pub(super) coefficients: Vec<f64>,
     luminance: f64,
     unit: Vec<f64>,
+    pub(super) source: Source,
+}
+
+/// The map a texel comes from: the light map the others are filtered from (the renderer
+/// reads it only through them), the seen map, the diffuse map, or the specular map of a
+/// shininess.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) enum Source {
+    Light,
+    Seen,
+    Diffuse,
+    Specular(f64),
 }
 
 /// Whether two texels radiate nearly the same spectrum (up to brightness).
@@ -93,7 +106,7 @@ fn weights(scale: &Scale, spectra: &[Tabulated]) -> (Vec<Vec<f64>>, Vec<f64>, Ve
 /// Every texel of the maps the renderer samples for `l` (see [`candidates`]).
 pub(super) fn all_candidates(
     l: &Lighting,
-    maps: &env::Maps,
+    maps: &Shown,
     spectra: &[Tabulated],
     shininess: &[f64],
 ) -> Result<Vec<Candidate>> {
@@ -101,20 +114,31 @@ pub(super) fn all_candidates(
     Ok(candidates(l, maps, &luminance, &rms, shininess))
 }
 
+/// A lighting's maps as the image can show them: the light map, and the seen map with the
+/// texels no pixel shows set to zero ([`crate::render::Scene::visible_seen`]).
+pub(super) struct Shown<'a> {
+    pub(super) light: &'a CoeffMap,
+    pub(super) seen: &'a CoeffMap,
+}
+
 /// Every texel of the maps the renderer samples for `l`, with a positive luminance.
 fn candidates(
     l: &Lighting,
-    maps: &env::Maps,
+    maps: &Shown,
     luminance: &[f64],
     rms: &[f64],
     shininess: &[f64],
 ) -> Vec<Candidate> {
     let f = env::prefilter(&l.environment, shininess);
-    let mut all: Vec<&CoeffMap> = vec![&maps.light, &maps.seen, &f.diffuse];
-    all.extend(f.specular.iter().map(|(_, m)| m));
+    let mut all: Vec<(&CoeffMap, Source)> = vec![
+        (maps.light, Source::Light),
+        (maps.seen, Source::Seen),
+        (&f.diffuse, Source::Diffuse),
+    ];
+    all.extend(f.specular.iter().map(|(n, m)| (m, Source::Specular(*n))));
     let k = luminance.len();
     let mut out = Vec::new();
-    for m in all {
+    for (m, source) in all {
         for i in 0..m.width * m.height {
             let c: Vec<f64> = m.texel(i).take(k).map(|v| v as f64).collect();
             let y: f64 = c.iter().zip(luminance).map(|(c, y)| c * y).sum();
@@ -125,6 +149,7 @@ fn candidates(
                     coefficients: c,
                     luminance: y,
                     unit: w.iter().map(|v| v / n).collect(),
+                    source,
                 });
             }
         }
@@ -152,7 +177,7 @@ fn farthest(c: &[Candidate], count: usize) -> Vec<(usize, f64)> {
 /// `fitted` fitted, the next [`CHECKED`] held out.
 pub(super) fn texels(
     l: &Lighting,
-    maps: &env::Maps,
+    maps: &Shown,
     spectra: &[Tabulated],
     sun_spd: &Tabulated,
     shininess: &[f64],
@@ -175,6 +200,7 @@ pub(super) fn texels(
                 coefficients: a.to_vec(),
                 luminance: y,
                 unit: Vec::new(),
+                source: Source::Light,
             });
         }
     }
@@ -258,7 +284,11 @@ pub(super) mod tests {
         else {
             unreachable!()
         };
-        let r = texels(&l, &maps, spectra, sun_spd, &[200.0], 1, &[]).unwrap();
+        let shown = Shown {
+            light: &maps.light,
+            seen: &maps.seen,
+        };
+        let r = texels(&l, &shown, spectra, sun_spd, &[200.0], 1, &[]).unwrap();
         assert!(r.len() >= 2, "{}", r.len());
         let scale = Scale::new().unwrap();
         for t in &r {
