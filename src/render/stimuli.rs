@@ -514,6 +514,16 @@ impl Scene {
 
     /// The scene's stimuli, a spectral map's texels as `texels` says.
     pub fn stimuli_with(&self, texels: &TexelChoice) -> Result<Stimuli> {
+        self.stimuli_shown(texels, &self.visible_seens())
+    }
+
+    /// [`Scene::stimuli_with`], each lighting's seen map as `seen` holds it
+    /// ([`Scene::visible_seens`]).
+    fn stimuli_shown(
+        &self,
+        texels: &TexelChoice,
+        seen: &[Option<super::env::CoeffMap>],
+    ) -> Result<Stimuli> {
         let mut out = Stimuli {
             fit: Vec::new(),
             held_out: Vec::new(),
@@ -528,8 +538,13 @@ impl Scene {
                 .filter(|(l, _)| *l == li)
                 .map(|(_, c)| c.as_slice())
                 .collect();
-            let seen = self.visible_seen(li);
-            for r in radiated(lighting, seen.as_ref(), &shininess, texels.fitted, &added)? {
+            for r in radiated(
+                lighting,
+                seen[li].as_ref(),
+                &shininess,
+                texels.fitted,
+                &added,
+            )? {
                 let b = Brightness {
                     env: r.peak.unwrap_or(b.env),
                     sun: b.sun * r.sun_scale,

@@ -176,10 +176,12 @@ fn texel_error(c: &Candidate, t: &[Template], which: &[usize], white: Xyz) -> (f
         .fold((0.0, 0), |a, x| if x.0 > a.0 { x } else { a })
 }
 
-/// The texels of `scene`'s spectral maps on which `q` errs most, worst first: up to `count`,
-/// no two alike, and the largest error over all of them.
+/// The texels of `scene`'s maps on which `q` errs most, worst first: up to `count`, no two
+/// alike, and the largest error over all of them. `seen` holds each lighting's seen map as the
+/// image can show it ([`Scene::visible_seens`]).
 pub fn worst_texels(
     scene: &Scene,
+    seen: &[Option<crate::render::env::CoeffMap>],
     q: &Quadrature,
     white: Xyz,
     count: usize,
@@ -188,12 +190,12 @@ pub fn worst_texels(
     let reference = Quadrature::uniform(grid, Rule::Simpson, q.observer())?;
     let mut all: Vec<Miss> = Vec::new();
     for (li, l) in scene.lightings.iter().enumerate() {
-        let (Environment::Map(maps), Some(seen)) = (&l.environment, scene.visible_seen(li)) else {
+        let (Environment::Map(maps), Some(seen)) = (&l.environment, &seen[li]) else {
             continue;
         };
         let shown = texels::Shown {
             light: &maps.light,
-            seen: &seen,
+            seen,
         };
         let parts = expansion::parts(l)?;
         let tables = parts
@@ -311,7 +313,7 @@ mod tests {
         let grid = WavelengthGrid::new(380.0, 780.0, 40.0).unwrap();
         let q = Quadrature::uniform(grid, Rule::Trapezoid, Observer::Cie1931).unwrap();
         let white = RgbSpace::SRGB.xyz_from_rgb([1.0; 3]);
-        let (max, misses) = worst_texels(&scene, &q, white, 3).unwrap();
+        let (max, misses) = worst_texels(&scene, &scene.visible_seens(), &q, white, 3).unwrap();
         assert!(!misses.is_empty() && max > 0.0 && max == misses[0].error);
         let wl: Vec<f64> = (380..=780).map(f64::from).collect();
         for m in &misses {
@@ -349,7 +351,7 @@ mod tests {
         let scene = Preset::Chart.scene(16, 12, "A", Some(l)).unwrap();
         let q = three_nodes();
         let white = RgbSpace::SRGB.xyz_from_rgb([1.0; 3]);
-        let (max, misses) = worst_texels(&scene, &q, white, 3).unwrap();
+        let (max, misses) = worst_texels(&scene, &scene.visible_seens(), &q, white, 3).unwrap();
         assert!(!misses.is_empty() && max > 0.0 && max == misses[0].error);
         let wl: Vec<f64> = (380..=780).map(f64::from).collect();
         for m in &misses {
@@ -383,15 +385,12 @@ mod tests {
                 [0.3, 0.3, 0.3, 0.0]
             }
         });
-        let mut l = crate::render::Lighting::uniform("A", 1.0, None).unwrap();
-        l.environment = Environment::Map(std::sync::Arc::new(crate::render::env::Maps {
-            light: grey,
-            seen,
-        }));
+        let maps = crate::render::env::Maps { light: grey, seen };
+        let l = super::expansion::tests::paper_lighting("A", maps);
         let scene = Preset::Chart.scene(16, 12, "A", Some(l)).unwrap();
         let q = three_nodes();
         let white = RgbSpace::SRGB.xyz_from_rgb([1.0; 3]);
-        let (_, misses) = worst_texels(&scene, &q, white, 8).unwrap();
+        let (_, misses) = worst_texels(&scene, &scene.visible_seens(), &q, white, 8).unwrap();
         let red = misses
             .iter()
             .find(|m| m.coefficients[0] > 10.0)

@@ -8,11 +8,10 @@
 //! normaliser, so that the check integrates each texel as the renderer does.
 
 use super::{texels, Radiated};
-use crate::colorimetry::Observer;
 use crate::error::Result;
 use crate::quadrature::Quadrature;
 use crate::render::{LightSpectra, Lighting};
-use crate::spectrum::{Interpolation, Rule, Tabulated, WavelengthGrid};
+use crate::spectrum::{Interpolation, Tabulated};
 use crate::tradeoff::{sample, Factor};
 
 /// One coefficient's spectrum: `reflectance * light`, over the luminance of `normaliser`.
@@ -104,15 +103,14 @@ pub(super) fn paper_texels(
         .iter()
         .map(|b| sample(b, &wl, Interpolation::SMOOTH))
         .collect();
-    // Brightness by CIE 1931 at 1 nm, whatever the render's observer (as for a map's own texels).
-    let grid = WavelengthGrid::new(380.0, 780.0, 1.0)?;
-    let q = Quadrature::uniform(grid, Rule::Simpson, Observer::Cie1931)?;
-    let s = sample(light, q.nodes_nm(), Interpolation::LIGHT);
+    // Brightness as for a map's own texels ([`texels::Scale`]), relative to the light's.
+    let scale = texels::Scale::new()?;
+    let s = scale.at(light);
     let luminance = |values: &[f64]| -> Result<f64> {
         let r = Tabulated::new(wl.clone(), values.to_vec())?;
-        let r = sample(&r, q.nodes_nm(), Interpolation::SMOOTH);
+        let r = sample(&r, &scale.wavelengths, Interpolation::SMOOTH);
         let lit: Vec<f64> = s.iter().zip(&r).map(|(s, r)| s * r).collect();
-        Ok(q.integrate(&lit)[1] / q.integrate(&s)[1])
+        Ok(scale.luminance(&lit) / scale.luminance(&s))
     };
     let mut out = Vec::new();
     for (k, c) in added.iter().enumerate() {
@@ -156,9 +154,14 @@ pub(super) mod tests {
             light: map.clone(),
             seen: map,
         };
-        let mut l = Lighting::uniform("A", 1.0, None).unwrap();
-        l.environment = Environment::Map(Arc::new(maps.clone()));
-        (l, maps)
+        (paper_lighting("A", maps.clone()), maps)
+    }
+
+    /// An RGB map's lighting: the paper's basis under `light` (also `E`), with `maps`.
+    pub(in crate::render::stimuli) fn paper_lighting(light: &str, maps: env::Maps) -> Lighting {
+        let mut l = Lighting::uniform(light, 1.0, None).unwrap();
+        l.environment = Environment::Map(Arc::new(maps));
+        l
     }
 
     #[test]

@@ -14,6 +14,7 @@ use crate::quadrature::estimate::White;
 use crate::quadrature::fit::Options;
 use crate::quadrature::progress::{Report, Stage};
 use crate::quadrature::Kind;
+use crate::render::env::CoeffMap;
 use crate::render::{Environment, LightSpectra, Scene};
 
 /// Texels added to the fit per round of [`coverage`], and the most rounds.
@@ -52,6 +53,8 @@ impl Scene {
             })
         };
         let (any_map, own_map) = (map(false), map(true));
+        // What the image can show of each seen map: the same for every round.
+        let seen = self.visible_seens();
         let mut texels = TexelChoice::default();
         let mut fit_opts = *opts;
         let mut best: Option<Selection> = None;
@@ -59,6 +62,7 @@ impl Scene {
         let mut uniform = None;
         for round in 0..=COVERAGE_ROUNDS {
             let fitting = Fitting {
+                seen: &seen,
                 observer,
                 white,
                 family,
@@ -78,7 +82,7 @@ impl Scene {
                 return Ok(honest(selection, e, target, "", round));
             }
             let (max, misses) =
-                coverage::worst_texels(self, &selection.quadrature, white, ADDED_PER_ROUND)?;
+                coverage::worst_texels(self, &seen, &selection.quadrature, white, ADDED_PER_ROUND)?;
             let fitted = selection.estimate_de2000;
             let every = max.max(fitted);
             let through = misses
@@ -118,7 +122,7 @@ impl Scene {
         own_map: bool,
     ) -> Result<Selection> {
         loop {
-            let s = self.stimuli_with(texels)?;
+            let s = self.stimuli_shown(texels, f.seen)?;
             let scene = choose::Scene {
                 fit: &s.fit,
                 held_out: &s.held_out,
@@ -139,6 +143,7 @@ impl Scene {
 
 /// What one selection is made with.
 struct Fitting<'a> {
+    seen: &'a [Option<CoeffMap>],
     observer: Observer,
     white: Xyz,
     family: Family,

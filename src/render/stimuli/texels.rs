@@ -33,23 +33,23 @@ pub(super) fn equal_energy() -> Result<Tabulated> {
 
 /// The 1 nm grid the texels' spectra are tabulated on, and luminance over it relative to an
 /// equal-energy spectrum (CIE 1931: a weight for brightness, whatever the render's observer).
-struct Scale {
-    wavelengths: Vec<f64>,
+pub(super) struct Scale {
+    pub(super) wavelengths: Vec<f64>,
     q: Quadrature,
 }
 
 impl Scale {
-    fn new() -> Result<Scale> {
+    pub(super) fn new() -> Result<Scale> {
         let grid = WavelengthGrid::new(380.0, 780.0, 1.0)?;
         Ok(Scale {
             wavelengths: grid.wavelengths_nm().collect(),
             q: Quadrature::uniform(grid, Rule::Simpson, Observer::Cie1931)?,
         })
     }
-    fn at(&self, s: &Tabulated) -> Vec<f64> {
+    pub(super) fn at(&self, s: &Tabulated) -> Vec<f64> {
         sample(s, &self.wavelengths, Interpolation::LIGHT)
     }
-    fn luminance(&self, values: &[f64]) -> f64 {
+    pub(super) fn luminance(&self, values: &[f64]) -> f64 {
         self.q.integrate(values)[1] / self.q.sum()[1]
     }
 }

@@ -11,6 +11,14 @@ use crate::render::prepare::pinhole_tangent;
 use crate::render::{Backdrop, Environment, Scene};
 
 impl Scene {
+    /// [`Scene::visible_seen`] of every lighting, in order: what a choice of quadrature reads
+    /// for each of its rounds.
+    pub(super) fn visible_seens(&self) -> Vec<Option<CoeffMap>> {
+        (0..self.lightings.len())
+            .map(|li| self.visible_seen(li))
+            .collect()
+    }
+
     /// Lighting `li`'s seen map with every texel the image cannot show set to zero (None when
     /// the lighting is not a map).
     pub(super) fn visible_seen(&self, li: usize) -> Option<CoeffMap> {
@@ -50,19 +58,18 @@ impl Scene {
 #[cfg(test)]
 mod tests {
     use crate::render::env::{self, CoeffMap};
-    use crate::render::{Backdrop, Environment, Preset};
-    use std::sync::Arc;
+    use crate::render::{Backdrop, Preset};
 
     #[test]
     fn only_the_texels_behind_the_view_are_shown() {
         // A map whose every texel is lit: through the default 60 degree pinhole down -Z, the
         // image shows a patch around -Z and nothing near +Z (behind the camera).
         let map = CoeffMap::from_fn(64, |_| [1.0, 0.0, 0.0, 0.0]);
-        let mut l = crate::render::Lighting::uniform("D65", 1.0, None).unwrap();
-        l.environment = Environment::Map(Arc::new(env::Maps {
+        let maps = env::Maps {
             light: map.clone(),
             seen: map.clone(),
-        }));
+        };
+        let l = super::super::expansion::tests::paper_lighting("D65", maps);
         let mut scene = Preset::Ball.scene(24, 24, "D65", Some(l)).unwrap();
         let lit = |s: &crate::render::Scene| -> Vec<[f64; 3]> {
             let v = s.visible_seen(s.background).unwrap();
