@@ -486,15 +486,18 @@ pub fn delta_e_2000(lab1: Lab, lab2: Lab) -> f64 {
     use std::f64::consts::PI;
     let [l1, a1, b1] = lab1.0;
     let [l2, a2, b2] = lab2.0;
-    let c1 = a1.hypot(b1);
-    let c2 = a2.hypot(b2);
+    // sqrt(a^2 + b^2), not hypot: Lab's values are far from overflow, and the fit calls this
+    // for every stimulus on every node set it tries.
+    let norm = |a: f64, b: f64| (a * a + b * b).sqrt();
+    let c1 = norm(a1, b1);
+    let c2 = norm(a2, b2);
     let c_bar = (c1 + c2) / 2.0;
     let c7 = c_bar.powi(7);
     let g = 0.5 * (1.0 - (c7 / (c7 + 25f64.powi(7))).sqrt());
     let a1p = (1.0 + g) * a1;
     let a2p = (1.0 + g) * a2;
-    let c1p = a1p.hypot(b1);
-    let c2p = a2p.hypot(b2);
+    let c1p = norm(a1p, b1);
+    let c2p = norm(a2p, b2);
     let hue = |b: f64, a: f64| {
         if a == 0.0 && b == 0.0 {
             0.0
@@ -532,10 +535,20 @@ pub fn delta_e_2000(lab1: Lab, lab2: Lab) -> f64 {
     } else {
         (h1p + h2p - 360.0) / 2.0
     };
-    let t = 1.0 - 0.17 * (hp_bar - 30.0).to_radians().cos()
-        + 0.24 * (2.0 * hp_bar).to_radians().cos()
-        + 0.32 * (3.0 * hp_bar + 6.0).to_radians().cos()
-        - 0.20 * (4.0 * hp_bar - 63.0).to_radians().cos();
+    // cos(k h + phase) for k = 1..4 from one sine and cosine of h, by the angle-sum formulas.
+    let (s1, c1h) = hp_bar.to_radians().sin_cos();
+    let (s2, c2h) = (2.0 * s1 * c1h, c1h * c1h - s1 * s1);
+    let (s3, c3h) = (s2 * c1h + c2h * s1, c2h * c1h - s2 * s1);
+    let (s4, c4h) = (2.0 * s2 * c2h, c2h * c2h - s2 * s2);
+    // (cos, sin) of the phases 30, 6 and 63 degrees.
+    const PHASES: [(f64, f64); 3] = [
+        (0.866_025_403_784_438_7, 0.5),
+        (0.994_521_895_368_273_3, 0.104_528_463_267_653_47),
+        (0.453_990_499_739_546_8, 0.891_006_524_188_367_8),
+    ];
+    let [(cos30, sin30), (cos6, sin6), (cos63, sin63)] = PHASES;
+    let t = 1.0 - 0.17 * (c1h * cos30 + s1 * sin30) + 0.24 * c2h + 0.32 * (c3h * cos6 - s3 * sin6)
+        - 0.20 * (c4h * cos63 + s4 * sin63);
     let d_theta = 30.0 * (-((hp_bar - 275.0) / 25.0).powi(2)).exp();
     let cp7 = cp_bar.powi(7);
     let rc = 2.0 * (cp7 / (cp7 + 25f64.powi(7))).sqrt();

@@ -10,7 +10,7 @@
 //! where it starts. The true CIEDE2000 of each level's result is measured and the best kept.
 
 use super::estimate::worst;
-use super::lsq::{weighted_gram, Minimax, Problem, Weights};
+use super::lsq::{symmetric_gram, weighted_gram, Minimax, Problem, Spectra, Weights};
 use nalgebra::{DMatrix, DVector};
 
 /// The p-norm's exponents, one Newton solve each: the last is within `N^(1/p)` (under 3% for a
@@ -102,12 +102,15 @@ impl Problem<'_> {
             return None;
         }
         let half = p / 2.0;
-        let a = DMatrix::from_fn(rows, n, |r, i| {
-            100.0 * self.row_spectra(r).0[cols[i]] / steps[r].y
-        });
-        let b = DMatrix::from_fn(rows, n, |r, i| {
-            100.0 * self.row_spectra(r).1[cols[i]] / (steps[r].y * steps[r].y)
-        });
+        let per_row = |f: &dyn Fn(&Step) -> f64| DVector::from_fn(rows, |r, _| f(&steps[r]));
+        let a = scale_rows(
+            self.gather(cols, Spectra::Values),
+            &per_row(&|s| 100.0 / s.y),
+        );
+        let b = scale_rows(
+            self.gather(cols, Spectra::Light),
+            &per_row(&|s| 100.0 / (s.y * s.y)),
+        );
         // Per row: the coefficients of a a' in block (c, d), of a b' in (c, Y), of b b' in
         // (Y, Y), and of a and b in the gradient's block c.
         let zeros = || DVector::<f64>::zeros(rows);
@@ -148,7 +151,7 @@ impl Problem<'_> {
         let mut g = DVector::<f64>::zeros(3 * n);
         for c in 0..3 {
             for d in c..3 {
-                let mut block = weighted_gram(&a, &kaa[c][d], &a);
+                let mut block = symmetric_gram(&a, &kaa[c][d]);
                 if d == 1 {
                     block += weighted_gram(&a, &kab[c], &b);
                 }
@@ -156,7 +159,7 @@ impl Problem<'_> {
                     block += weighted_gram(&b, &kab[d], &a);
                 }
                 if c == 1 && d == 1 {
-                    block += weighted_gram(&b, &kbb, &b);
+                    block += symmetric_gram(&b, &kbb);
                 }
                 h.view_mut((c * n, d * n), (n, n)).copy_from(&block);
                 if c != d {
@@ -233,6 +236,14 @@ impl Problem<'_> {
             .sum::<f64>()
             .max(0.0)
     }
+}
+
+/// `m` with row `r` times `k[r]`.
+fn scale_rows(mut m: DMatrix<f64>, k: &DVector<f64>) -> DMatrix<f64> {
+    for mut col in m.column_iter_mut() {
+        col.component_mul_assign(k);
+    }
+    m
 }
 
 fn weights_of(x: &DVector<f64>, n: usize) -> Weights {
