@@ -68,15 +68,18 @@ struct Columns {
 
 impl Columns {
     fn new(rows: &[Row], len: usize) -> Columns {
-        let by = |light: bool| -> Vec<Vec<f64>> {
-            let of = |r: &Row, j: usize| if light { r.light[j] } else { r.values[j] };
+        let by = |which: Spectra| -> Vec<Vec<f64>> {
+            let of = |r: &Row, j: usize| match which {
+                Spectra::Values => r.values[j],
+                Spectra::Light => r.light[j],
+            };
             (0..len)
                 .map(|j| rows.iter().map(|r| of(r, j)).collect())
                 .collect()
         };
         Columns {
-            values: by(false),
-            light: by(true),
+            values: by(Spectra::Values),
+            light: by(Spectra::Light),
         }
     }
 }
@@ -409,10 +412,7 @@ pub(crate) struct Minimax {
 /// Gram products).
 pub(super) fn symmetric_gram(m: &DMatrix<f64>, k: &DVector<f64>) -> DMatrix<f64> {
     let n = m.ncols();
-    let mut scaled = m.clone();
-    for mut col in scaled.column_iter_mut() {
-        col.component_mul_assign(k);
-    }
+    let scaled = scale_rows(m.clone(), k);
     let mut g = DMatrix::zeros(n, n);
     for i in 0..n {
         for j in i..n {
@@ -426,11 +426,15 @@ pub(super) fn symmetric_gram(m: &DMatrix<f64>, k: &DVector<f64>) -> DMatrix<f64>
 
 /// `l' diag(k) m`: a Gram product with a weight per row.
 pub(super) fn weighted_gram(l: &DMatrix<f64>, k: &DVector<f64>, m: &DMatrix<f64>) -> DMatrix<f64> {
-    let mut scaled = m.clone();
-    for mut col in scaled.column_iter_mut() {
+    l.tr_mul(&scale_rows(m.clone(), k))
+}
+
+/// `m` with row `r` times `k[r]`.
+pub(super) fn scale_rows(mut m: DMatrix<f64>, k: &DVector<f64>) -> DMatrix<f64> {
+    for mut col in m.column_iter_mut() {
         col.component_mul_assign(k);
     }
-    l.tr_mul(&scaled)
+    m
 }
 
 /// How far CIELAB moves per unit of X, Y and Z at `xyz` (white `white`), each over CIEDE2000's

@@ -10,7 +10,7 @@
 //! where it starts. The true CIEDE2000 of each level's result is measured and the best kept.
 
 use super::estimate::worst;
-use super::lsq::{symmetric_gram, weighted_gram, Minimax, Problem, Spectra, Weights};
+use super::lsq::{scale_rows, symmetric_gram, weighted_gram, Minimax, Problem, Spectra, Weights};
 use nalgebra::{DMatrix, DVector};
 
 /// The p-norm's exponents, one Newton solve each: the last is within `N^(1/p)` (under 3% for a
@@ -236,14 +236,6 @@ impl Problem<'_> {
             .sum::<f64>()
             .max(0.0)
     }
-}
-
-/// `m` with row `r` times `k[r]`.
-fn scale_rows(mut m: DMatrix<f64>, k: &DVector<f64>) -> DMatrix<f64> {
-    for mut col in m.column_iter_mut() {
-        col.component_mul_assign(k);
-    }
-    m
 }
 
 fn weights_of(x: &DVector<f64>, n: usize) -> Weights {
