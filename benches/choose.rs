@@ -46,6 +46,11 @@ fn choose(c: &mut Criterion) {
         });
     }
     g.finish();
+    // `cargo test` runs each bench once in the test profile, where this one fit takes minutes.
+    if !benchmarking() {
+        eprintln!("choose: the cylinders' group runs under `cargo bench` only");
+        return;
+    }
     let mut g = c.benchmark_group("choose, tolerance 0.5, thickness ramp");
     g.sample_size(10).measurement_time(Duration::from_secs(360));
     let s = scene(Preset::Cylinders, "D65");
@@ -56,6 +61,13 @@ fn choose(c: &mut Criterion) {
         })
     });
     g.finish();
+}
+
+/// Whether criterion measures (`cargo bench` passes `--bench`) rather than runs each bench once
+/// as a test (`cargo test`, or `cargo bench -- --test`), as criterion itself decides.
+fn benchmarking() -> bool {
+    let has = |flag: &str| std::env::args().any(|a| a == flag);
+    has("--bench") && !has("--test")
 }
 
 criterion_group!(benches, choose);

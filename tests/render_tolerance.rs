@@ -200,18 +200,18 @@ fn under_rgb_map(preset: Preset, name: &str, tol: f64) -> (Selection, f64) {
 /// An RGB map is checked on every texel the image can show, as a spectral map is: each texel
 /// radiates its own mixture of the paper's basis, and six mixtures stood for the whole map.
 /// Before, the ball under the yard's RGB rendition at tolerance 0.1 erred 0.120 on the image
-/// against an estimate of 0.044, and the chart at 0.5 erred 0.504 against 0.290.
+/// against an estimate of 0.044, and the chart at 0.5 erred 0.504 against 0.290. The chart's
+/// case (about 5 minutes in the test profile, 2 in release: its refit searches 14 nodes) is in
+/// the sweep below, with the ball at 0.5, under all 20 maps.
 #[test]
 fn an_rgb_maps_texels_keep_the_image_within_the_tolerance_and_the_estimate() {
-    for (preset, tol) in [(Preset::Ball, 0.1), (Preset::Chart, 0.5)] {
-        let (c, max) = under_rgb_map(preset, "yard_overcast", tol);
-        assert!(
-            c.met && c.kind == Kind::Scene && max <= tol && max <= c.estimate_de2000,
-            "{preset:?} at {tol}: {} nodes, estimate {:.3}, image {max:.3}",
-            c.quadrature.len(),
-            c.estimate_de2000
-        );
-    }
+    let (c, max) = under_rgb_map(Preset::Ball, "yard_overcast", 0.1);
+    assert!(
+        c.met && c.kind == Kind::Scene && max <= 0.1 && max <= c.estimate_de2000,
+        "{} nodes, estimate {:.3}, image {max:.3}",
+        c.quadrature.len(),
+        c.estimate_de2000
+    );
 }
 
 /// The RGB rendition of every ground-truth map under the ball (tolerance 0.5 and 0.1) and the
