@@ -128,6 +128,57 @@ fn a_uniform_choice_meets_the_tolerance_too() {
     assert!(image_error(&s, &c.quadrature) <= TOL);
 }
 
+/// The last check of `--tolerance` is the image itself, rendered on the quadrature and at 1 nm.
+/// With a margin of 1.6 the stimuli alone let the chart's image err beyond the tolerance; the
+/// image's check sees it and refits until the image is within the tolerance.
+#[test]
+fn the_image_is_checked_against_the_1nm_render_and_refitted_when_it_misses() {
+    let s = scene(Preset::Chart, "D65", 48);
+    let opts = Options {
+        margin: 1.6,
+        ..Options::new(TOL).unwrap()
+    };
+    // The stimuli alone, as the fit saw them before the image was checked.
+    let st = s.stimuli().unwrap();
+    let stimuli_only = specmap::quadrature::choose::select(
+        &specmap::quadrature::choose::Scene {
+            fit: &st.fit,
+            held_out: &st.held_out,
+            observer: Observer::Cie1931,
+            start_nm: 380.0,
+            end_nm: 780.0,
+            white: specmap::quadrature::estimate::White::Fixed(
+                RgbSpace::SRGB.xyz_from_rgb([1.0; 3]),
+            ),
+        },
+        Family::Scene,
+        &opts,
+    )
+    .unwrap();
+    let before = image_error(&s, &stimuli_only.quadrature);
+    assert!(before > TOL, "the stimuli alone: image {before:.3}");
+    let c = s
+        .choose_quadrature(Observer::Cie1931, RgbSpace::SRGB, Family::Scene, &opts)
+        .unwrap();
+    let after = image_error(&s, &c.quadrature);
+    let check = c.image.expect("the image was checked");
+    eprintln!(
+        "margin 1.6: {} nodes, image {before:.3}; checked: {} nodes, image {after:.3} ({})",
+        stimuli_only.quadrature.len(),
+        c.quadrature.len(),
+        c.reason
+    );
+    assert!(
+        c.met && c.kind == Kind::Scene && after <= TOL,
+        "{}",
+        c.reason
+    );
+    assert!(
+        (check.max_de2000 - after).abs() < 1e-9,
+        "{check:?} against {after}"
+    );
+}
+
 /// The ball under maps of their own spectra (spectral EXRs), which the renderer integrates as
 /// they stand: each texel is an emission over an equal-energy light at its own luminance, the
 /// texels fitted stand for the maps the renderer samples (diffuse and specular as well as raw),

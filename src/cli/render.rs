@@ -580,6 +580,21 @@ pub(crate) fn write_selection(out: &mut String, s: &Selection) {
             f.worst
         );
     }
+    if let Some(c) = &s.image {
+        outln!(
+            out,
+            "               image: max {:.3} (pixel {}, {}), mean {:.3} against the 1 nm render, \
+             on {}",
+            c.max_de2000,
+            c.max_at[0],
+            c.max_at[1],
+            c.mean_de2000,
+            match c.stride {
+                1 => format!("all {} pixels", c.pixels),
+                k => format!("{} pixels (every {k}th row and column)", c.pixels),
+            }
+        );
+    }
     let u = &s.uniform;
     outln!(
         out,

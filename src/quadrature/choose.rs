@@ -72,6 +72,21 @@ pub struct Selection {
     /// The scene fit (with `--quadrature scene`).
     pub scene: Option<fit::Choice>,
     pub uniform: UniformChoice,
+    /// The quadrature against the 1 nm render on the image's own pixels, where the caller
+    /// renders one and checked it (`render --tolerance` with a scene quadrature).
+    pub image: Option<ImageCheck>,
+}
+
+/// A quadrature's render against the 1 nm Simpson render of the same image, on a lattice of
+/// its pixels (every `stride`-th row and column, each block's centre).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct ImageCheck {
+    pub max_de2000: f64,
+    pub mean_de2000: f64,
+    /// The pixel (x, y) of the largest.
+    pub max_at: [usize; 2],
+    pub pixels: usize,
+    pub stride: usize,
 }
 
 /// The error of `q` over both sets.
@@ -215,6 +230,7 @@ pub fn select_reporting(
         reason,
         scene: fitted,
         uniform,
+        image: None,
     })
 }
 

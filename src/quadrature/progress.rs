@@ -30,6 +30,16 @@ pub enum Stage {
         fitted: f64,
         every: f64,
     },
+    /// The image's `pixels` pixels are being rendered at 1 nm, to check the quadrature on.
+    Image { pixels: usize },
+    /// `nodes` nodes err `image` on the image, beyond `tolerance`: the fit's margin narrows
+    /// for round `round`.
+    ImageMiss {
+        round: usize,
+        nodes: usize,
+        image: f64,
+        tolerance: f64,
+    },
 }
 
 impl fmt::Display for Stage {
@@ -62,6 +72,19 @@ impl fmt::Display for Stage {
                 f,
                 "every texel: {nodes} nodes err {every:.3} (the fit's stimuli {fitted:.3}); \
                  refitting, round {round}"
+            ),
+            Stage::Image { pixels } => {
+                write!(f, "checking the image: {pixels} pixels at 1 nm")
+            }
+            Stage::ImageMiss {
+                round,
+                nodes,
+                image,
+                tolerance,
+            } => write!(
+                f,
+                "the image: {nodes} nodes err {image:.3}, beyond {tolerance}; refitting, \
+                 round {round}"
             ),
         }
     }

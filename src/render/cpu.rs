@@ -29,6 +29,16 @@ pub fn render(p: &Prepared) -> Image {
     }
 }
 
+/// Renders only the pixels `at` ((x, y) each), in order, as [`render`] renders them.
+pub fn render_pixels(p: &Prepared, at: &[[usize; 2]]) -> Vec<[f32; 3]> {
+    let constant = constant_maps(p);
+    at.par_iter()
+        .map_init(Scratch::default, |scratch, &[x, y]| {
+            pixel(p, &constant, x, y, scratch)
+        })
+        .collect()
+}
+
 /// The world position on the image plane of pixel (x, y)'s centre.
 pub fn pixel_position(p: &Prepared, x: usize, y: usize) -> [f64; 2] {
     let v = p.params.view.map(|c| c as f64);

@@ -427,4 +427,15 @@ impl Scene {
         let p = prepare::Prepared::with_quadrature(self, q, space)?;
         Ok(cpu::render(&p))
     }
+
+    /// The pixels `at` ((x, y) each) of [`Scene::render_cpu_with`]'s image, in order.
+    pub fn render_cpu_pixels(
+        &self,
+        q: &crate::quadrature::Quadrature,
+        space: RgbSpace,
+        at: &[[usize; 2]],
+    ) -> Result<Vec<[f32; 3]>> {
+        let p = prepare::Prepared::with_quadrature(self, q, space)?;
+        Ok(cpu::render_pixels(&p, at))
+    }
 }

@@ -29,6 +29,7 @@
 
 mod coverage;
 mod expansion;
+mod pixels;
 mod selection;
 mod texels;
 mod visible;

@@ -4,12 +4,14 @@
 //! held-out texels join the fit where it misses on them; then every texel of the map the image
 //! can show is checked ([`super::coverage`]); where the quadrature misses on some, the worst
 //! join the fit and the fit's margin narrows by the gap between its estimate and theirs. The
-//! estimate reported is the largest over every texel.
+//! estimate reported is the largest over every texel. Last, with or without a map, the image
+//! itself is rendered on the quadrature and at 1 nm ([`super::pixels`]); where it errs beyond
+//! the tolerance, the margin narrows by the ratio and the fit runs again.
 
-use super::{coverage, texels, TexelChoice};
+use super::{coverage, pixels, texels, TexelChoice};
 use crate::colorimetry::{Observer, RgbSpace, Xyz};
 use crate::error::Result;
-use crate::quadrature::choose::{self, Family, Selection};
+use crate::quadrature::choose::{self, Family, ImageCheck, Selection};
 use crate::quadrature::estimate::White;
 use crate::quadrature::fit::Options;
 use crate::quadrature::progress::{Report, Stage};
@@ -17,9 +19,10 @@ use crate::quadrature::Kind;
 use crate::render::env::CoeffMap;
 use crate::render::{Environment, LightSpectra, Scene};
 
-/// Texels added to the fit per round of [`coverage`], and the most rounds.
+/// Texels added to the fit per round of [`coverage`], and the most refits (after the texels'
+/// check or the image's).
 const ADDED_PER_ROUND: usize = 8;
-const COVERAGE_ROUNDS: usize = 3;
+const REFITS: usize = 3;
 
 impl Scene {
     /// `--tolerance`: the cheapest quadrature over the scene's stimuli in the output `space`
@@ -53,14 +56,15 @@ impl Scene {
             })
         };
         let (any_map, own_map) = (map(false), map(true));
-        // What the image can show of each seen map: the same for every round.
+        // What the image can show of each seen map, and its 1 nm render: the same every round.
         let seen = self.visible_seens();
+        let mut reference: Option<pixels::Reference> = None;
         let mut texels = TexelChoice::default();
         let mut fit_opts = *opts;
-        let mut best: Option<Selection> = None;
+        let mut best: Option<(f64, Selection)> = None;
         // The uniform grid beside the choice is the one for the caller's margin.
         let mut uniform = None;
-        for round in 0..=COVERAGE_ROUNDS {
+        for round in 0..=REFITS {
             let fitting = Fitting {
                 seen: &seen,
                 observer,
@@ -70,47 +74,86 @@ impl Scene {
                 report,
             };
             let mut selection = self.fit_texels(&fitting, &mut texels, own_map)?;
-            if !any_map {
-                return Ok(selection);
-            }
             match &uniform {
                 None => uniform = Some(selection.uniform.clone()),
                 Some(u) => selection.uniform = u.clone(),
             }
             if selection.kind != Kind::Scene {
-                let e = selection.estimate_de2000;
-                return Ok(honest(selection, e, target, "", round));
-            }
-            let (max, misses) =
-                coverage::worst_texels(self, &seen, &selection.quadrature, white, ADDED_PER_ROUND)?;
-            let fitted = selection.estimate_de2000;
-            let every = max.max(fitted);
-            let through = misses
-                .first()
-                .map_or(String::new(), |m| format!("through {}", m.surface));
-            let selection = honest(selection, every, target, &through, round);
-            if every <= target {
-                return Ok(selection);
-            }
-            let nodes = selection.quadrature.len();
-            if best.as_ref().is_none_or(|b| every < b.estimate_de2000) {
-                best = Some(selection);
-            }
-            if round < COVERAGE_ROUNDS {
-                let round = round + 1;
-                report(&Stage::Texels {
-                    round,
-                    nodes,
-                    fitted,
-                    every,
+                return Ok(if any_map {
+                    let e = selection.estimate_de2000;
+                    honest(selection, e, target, "", round)
+                } else {
+                    selection
                 });
-                fit_opts.margin *= (fitted / every).clamp(0.7, 0.9);
-                texels
-                    .added
-                    .extend(misses.into_iter().map(|m| (m.lighting, m.coefficients)));
+            }
+            // Every texel the image can show (under a map).
+            let fitted = selection.estimate_de2000;
+            let (mut selection, misses) = if any_map {
+                let q = &selection.quadrature;
+                let (max, misses) = coverage::worst_texels(self, &seen, q, white, ADDED_PER_ROUND)?;
+                let every = max.max(fitted);
+                let through = misses
+                    .first()
+                    .map_or(String::new(), |m| format!("through {}", m.surface));
+                (honest(selection, every, target, &through, round), misses)
+            } else {
+                // Judged by the caller's target, as under a map, after a narrowed refit too.
+                selection.target_de2000 = target;
+                (selection, Vec::new())
+            };
+            let every = selection.estimate_de2000;
+            // The image itself, where the texels pass.
+            if every <= target {
+                let r = match reference.take() {
+                    Some(r) => r,
+                    None => {
+                        let pixels = pixels::lattice_len(self.width, self.height);
+                        report(&Stage::Image { pixels });
+                        pixels::Reference::new(self, &selection.quadrature, space)?
+                    }
+                };
+                let check = r.check(self, &selection.quadrature)?;
+                reference = Some(r);
+                // Under a map the reason already counts the refits.
+                let refits = (!any_map).then_some(round);
+                on_the_image(&mut selection, check, refits);
+                if selection.met {
+                    return Ok(selection);
+                }
+            }
+            // How far this round is from passing, relative to what it must meet.
+            let image = selection.image.map_or(0.0, |c| c.max_de2000);
+            let excess = (every / target).max(image / opts.tolerance);
+            let nodes = selection.quadrature.len();
+            if best.as_ref().is_none_or(|b| excess < b.0) {
+                best = Some((excess, selection));
+            }
+            if round < REFITS {
+                let round = round + 1;
+                let narrow = if every > target {
+                    report(&Stage::Texels {
+                        round,
+                        nodes,
+                        fitted,
+                        every,
+                    });
+                    texels
+                        .added
+                        .extend(misses.into_iter().map(|m| (m.lighting, m.coefficients)));
+                    fitted / every
+                } else {
+                    report(&Stage::ImageMiss {
+                        round,
+                        nodes,
+                        image,
+                        tolerance: opts.tolerance,
+                    });
+                    opts.tolerance / image
+                };
+                fit_opts.margin *= narrow.clamp(0.7, 0.9);
             }
         }
-        Ok(best.expect("a round ran"))
+        Ok(best.expect("a round ran").1)
     }
 
     /// One selection over the stimuli with `texels`; under a spectral map, while the fit misses
@@ -151,6 +194,40 @@ struct Fitting<'a> {
     report: Report<'a>,
 }
 
+/// `s` with the image's `check`: met only if the image is within the tolerance too, and the
+/// reason saying so (and after how many `refits`, unless it says already).
+fn on_the_image(s: &mut Selection, check: ImageCheck, refits: Option<usize>) {
+    s.image = Some(check);
+    let (max, pixels) = (check.max_de2000, check.pixels);
+    let within = max <= s.tolerance_de2000;
+    s.met &= within;
+    let lattice = match check.stride {
+        1 => format!("its {pixels} pixels"),
+        k => format!("{pixels} of its pixels, every {k}th row and column"),
+    };
+    let after = refits.map_or(String::new(), |k| format!(" ({})", refit_count(k)));
+    s.reason = if within {
+        format!(
+            "{}; the image errs at most {max:.3} on {lattice}{after}",
+            s.reason
+        )
+    } else {
+        format!(
+            "{} nodes err {max:.3} on the image ({lattice}), beyond the tolerance{after}",
+            s.quadrature.len(),
+        )
+    };
+}
+
+/// "no refit", "1 refit", "k refits".
+fn refit_count(refits: usize) -> String {
+    match refits {
+        0 => "no refit".to_string(),
+        1 => "1 refit".to_string(),
+        k => format!("{k} refits"),
+    }
+}
+
 /// `s` with its estimate raised to `every` (the largest over every texel the image can show,
 /// worst `through` a surface) after `refits` rounds, the caller's target, and a reason saying
 /// so.
@@ -166,11 +243,7 @@ fn honest(mut s: Selection, every: f64, target: f64, through: &str, refits: usiz
         } else {
             "no uniform grid meets it".into()
         };
-        let refits = match refits {
-            0 => "no refit".to_string(),
-            1 => "1 refit".to_string(),
-            k => format!("{k} refits"),
-        };
+        let refits = refit_count(refits);
         s.reason = if s.met {
             format!(
                 "{n} nodes meet the target on every texel the image can show ({refits}); {uniform}"
