@@ -4,6 +4,7 @@ colour-science's Fichet 2021 channel parsing), and its RGB EXR input against Ope
 The Rust side is `examples/write_spectral.rs`: pixel (x, y), band k of the wavelengths
 382.5, 400, 450, ..., 700 nm holds 0.5 (x + 1) + 0.25 y + 0.125 k; the preview R = x, G = y, B = 1.
 """
+import os
 import pathlib
 import re
 import subprocess
@@ -20,11 +21,14 @@ WIDTH, HEIGHT = 8, 5
 COMPRESSIONS = ["none", "rle", "zip", "zips", "piz", "pxr24", "b44", "b44a"]
 
 
+# tools/test.sh builds the examples before pytest and names the binary; by hand, cargo builds it.
+WRITE_SPECTRAL = os.environ.get("SPECMAP_WRITE_SPECTRAL")
+
+
 def example(*args):
-    p = subprocess.run(
-        ["cargo", "run", "-q", "--example", "write_spectral", "--", *map(str, args)],
-        cwd=ROOT, capture_output=True, text=True,
-    )
+    command = [WRITE_SPECTRAL] if WRITE_SPECTRAL else [
+        "cargo", "run", "-q", "--example", "write_spectral", "--"]
+    p = subprocess.run([*command, *map(str, args)], cwd=ROOT, capture_output=True, text=True)
     if p.returncode != 0:
         pytest.fail(f"write_spectral {' '.join(map(str, args))} exited {p.returncode}: {p.stderr}")
     return p.stdout
