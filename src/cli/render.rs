@@ -589,10 +589,7 @@ pub(crate) fn write_selection(out: &mut String, s: &Selection) {
             c.max_at[0],
             c.max_at[1],
             c.mean_de2000,
-            match c.stride {
-                1 => format!("all {} pixels", c.pixels),
-                k => format!("{} pixels (every {k}th row and column)", c.pixels),
-            }
+            c.lattice()
         );
     }
     let u = &s.uniform;

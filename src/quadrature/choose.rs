@@ -89,6 +89,31 @@ pub struct ImageCheck {
     pub stride: usize,
 }
 
+impl ImageCheck {
+    /// The pixels checked, in words: "all 9216 pixels", "16384 pixels, every 4th row and
+    /// column".
+    pub fn lattice(&self) -> String {
+        let n = self.pixels;
+        match (self.stride, n) {
+            (1, 1) => "its one pixel".to_string(),
+            (1, _) => format!("all {n} pixels"),
+            (k, _) => format!("{n} pixels, every {} row and column", ordinal(k)),
+        }
+    }
+}
+
+/// "2nd", "3rd", "4th", "11th", "21st".
+fn ordinal(k: usize) -> String {
+    let suffix = match (k % 10, k % 100) {
+        (_, 11..=13) => "th",
+        (1, _) => "st",
+        (2, _) => "nd",
+        (3, _) => "rd",
+        _ => "th",
+    };
+    format!("{k}{suffix}")
+}
+
 /// The error of `q` over both sets.
 fn estimate(fit: &Estimator, held: Option<&Estimator>, q: &Quadrature) -> Result<f64> {
     let mut e = fit.errors(q)?;
@@ -292,4 +317,31 @@ pub fn smooth_reflectances(
         c += step_nm;
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_lattice_reads_as_english() {
+        let check = |pixels, stride| ImageCheck {
+            max_de2000: 0.0,
+            mean_de2000: 0.0,
+            max_at: [0, 0],
+            pixels,
+            stride,
+        };
+        assert_eq!(check(1, 1).lattice(), "its one pixel");
+        assert_eq!(check(9216, 1).lattice(), "all 9216 pixels");
+        assert_eq!(
+            check(8192, 2).lattice(),
+            "8192 pixels, every 2nd row and column"
+        );
+        let ords: Vec<String> = [1, 3, 4, 11, 12, 13, 21, 22, 112].map(ordinal).into();
+        assert_eq!(
+            ords,
+            ["1st", "3rd", "4th", "11th", "12th", "13th", "21st", "22nd", "112th"]
+        );
+    }
 }

@@ -198,13 +198,10 @@ struct Fitting<'a> {
 /// reason saying so (and after how many `refits`, unless it says already).
 fn on_the_image(s: &mut Selection, check: ImageCheck, refits: Option<usize>) {
     s.image = Some(check);
-    let (max, pixels) = (check.max_de2000, check.pixels);
+    let max = check.max_de2000;
     let within = max <= s.tolerance_de2000;
     s.met &= within;
-    let lattice = match check.stride {
-        1 => format!("its {pixels} pixels"),
-        k => format!("{pixels} of its pixels, every {k}th row and column"),
-    };
+    let lattice = check.lattice();
     let after = refits.map_or(String::new(), |k| format!(" ({})", refit_count(k)));
     s.reason = if within {
         format!(
