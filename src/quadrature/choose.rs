@@ -209,8 +209,8 @@ pub fn select_reporting(
             f.estimate_de2000,
             true,
             format!(
-                "{} nodes meet the target; the cheapest uniform grid that does has {}",
-                f.quadrature.len(),
+                "{} the target; the cheapest uniform grid that does has {}",
+                super::nodes_verb(f.quadrature.len(), "meet"),
                 if uniform.met {
                     uniform.samples.to_string()
                 } else {

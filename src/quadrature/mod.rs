@@ -248,8 +248,25 @@ pub struct Summary {
     pub estimate_de2000: Option<f64>,
 }
 
+/// "1 node meets", "9 nodes meet": `n` nodes and a verb (given as after "nodes") that agrees.
+pub(crate) fn nodes_verb(n: usize, verb: &str) -> String {
+    if n == 1 {
+        let s = if verb.ends_with('s') { "es" } else { "s" };
+        format!("1 node {verb}{s}")
+    } else {
+        format!("{n} nodes {verb}")
+    }
+}
+
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn a_node_count_agrees_with_its_verb() {
+        assert_eq!(nodes_verb(1, "meet"), "1 node meets");
+        assert_eq!(nodes_verb(1, "miss"), "1 node misses");
+        assert_eq!(nodes_verb(9, "err"), "9 nodes err");
+    }
+
     use super::*;
 
     #[test]

@@ -15,7 +15,7 @@ use crate::quadrature::choose::{self, Family, ImageCheck, Selection};
 use crate::quadrature::estimate::White;
 use crate::quadrature::fit::Options;
 use crate::quadrature::progress::{Report, Stage};
-use crate::quadrature::Kind;
+use crate::quadrature::{nodes_verb, Kind};
 use crate::render::env::CoeffMap;
 use crate::render::{Environment, LightSpectra, Scene};
 
@@ -210,8 +210,8 @@ fn on_the_image(s: &mut Selection, check: ImageCheck, refits: Option<usize>) {
         )
     } else {
         format!(
-            "{} nodes err {max:.3} on the image ({lattice}), beyond the tolerance{after}",
-            s.quadrature.len(),
+            "{} {max:.3} on the image ({lattice}), beyond the tolerance{after}",
+            nodes_verb(s.quadrature.len(), "err"),
         )
     };
 }
@@ -243,10 +243,14 @@ fn honest(mut s: Selection, every: f64, target: f64, through: &str, refits: usiz
         let refits = refit_count(refits);
         s.reason = if s.met {
             format!(
-                "{n} nodes meet the target on every texel the image can show ({refits}); {uniform}"
+                "{} the target on every texel the image can show ({refits}); {uniform}",
+                nodes_verb(n, "meet")
             )
         } else {
-            format!("{n} nodes miss the target on the map's texels ({refits}), worst {every:.3} {through}")
+            format!(
+                "{} the target on the map's texels ({refits}), worst {every:.3} {through}",
+                nodes_verb(n, "miss")
+            )
         };
     }
     s
