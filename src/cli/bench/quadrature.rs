@@ -34,7 +34,13 @@ fn cases(quick: bool) -> Vec<(Preset, &'static str)> {
         return vec![(Preset::Ball, "D65"), (Preset::Ball, "FL2")];
     }
     let mut out = Vec::new();
-    for p in [Preset::Ball, Preset::TransparentBall, Preset::Cylinders] {
+    let presets = [
+        Preset::Ball,
+        Preset::TransparentBall,
+        Preset::Cylinders,
+        Preset::CheckerSpheres,
+    ];
+    for p in presets {
         out.extend(LIGHTS.iter().map(|&l| (p, l)));
     }
     out.push((Preset::Chart, "D65"));
