@@ -79,6 +79,14 @@ fn the_transparent_ball_and_the_chart_meet_the_tolerance_on_the_image() {
     assert!(check(Preset::Chart, "D65", 48) <= 16);
 }
 
+/// 24 matte ColorChecker spheres: every stimulus is fitted (none held out), so the image, rendered
+/// apart from the fit (f32 on the renderer's path, the background as seen), is what checks it.
+#[test]
+fn the_checker_spheres_meet_the_tolerance_on_the_image() {
+    assert!(check(Preset::CheckerSpheres, "A", 48) <= 8);
+    assert!(check(Preset::CheckerSpheres, "FL11", 48) <= 16);
+}
+
 #[test]
 fn the_estimate_covers_a_glossy_pigments_mixture_of_colour_and_highlight() {
     // The chart's plastic spheres show their pigment plus part of the key light's white
