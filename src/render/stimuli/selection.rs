@@ -128,6 +128,11 @@ impl Scene {
             if best.as_ref().is_none_or(|b| excess < b.0) {
                 best = Some((excess, selection));
             }
+            // Without a map there are no texels to add: a fit that misses the target itself
+            // (nothing meets it, the scene fit errs least) would only miss a narrower one.
+            if !any_map && every > target {
+                break;
+            }
             if round < REFITS {
                 let round = round + 1;
                 let narrow = if every > target {
