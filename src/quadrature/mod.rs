@@ -260,14 +260,14 @@ pub(crate) fn nodes_verb(n: usize, verb: &str) -> String {
 
 #[cfg(test)]
 mod tests {
+    use super::*;
+
     #[test]
     fn a_node_count_agrees_with_its_verb() {
         assert_eq!(nodes_verb(1, "meet"), "1 node meets");
         assert_eq!(nodes_verb(1, "miss"), "1 node misses");
         assert_eq!(nodes_verb(9, "err"), "9 nodes err");
     }
-
-    use super::*;
 
     #[test]
     fn a_uniform_grid_is_its_rule_times_the_cmfs() {

@@ -6,7 +6,7 @@
 //! stimulus, so the image itself is rendered on the quadrature and at 1 nm (Simpson) and
 //! compared, on a lattice of at most [`MAX_PIXELS`] of its pixels.
 
-use crate::colorimetry::RgbSpace;
+use crate::colorimetry::{Observer, RgbSpace};
 use crate::error::Result;
 use crate::quadrature::choose::ImageCheck;
 use crate::quadrature::Quadrature;
@@ -16,19 +16,34 @@ use crate::spectrum::{Rule, WavelengthGrid};
 /// The most pixels checked: an image with more is checked on every `stride`-th row and column.
 pub const MAX_PIXELS: usize = 128 * 128;
 
-/// The image's pixels checked, and their 1 nm render (made once, for every quadrature checked).
+/// The image's pixels checked, and their 1 nm render (made once, for every quadrature checked)
+/// as a one-row image.
 pub struct Reference {
     at: Vec<[usize; 2]>,
     stride: usize,
-    width: usize,
-    pixels: Vec<[f32; 3]>,
+    one_nm: Image,
     space: RgbSpace,
+}
+
+/// The blocks of a `width x height` image at `stride`.
+fn blocks(width: usize, height: usize, stride: usize) -> usize {
+    width.div_ceil(stride) * height.div_ceil(stride)
 }
 
 /// The smallest stride whose lattice of a `width x height` image has at most [`MAX_PIXELS`].
 fn stride(width: usize, height: usize) -> usize {
-    let lattice = |s: usize| width.div_ceil(s) * height.div_ceil(s);
-    (1..).find(|&s| lattice(s) <= MAX_PIXELS).expect("a stride")
+    (1..)
+        .find(|&s| blocks(width, height, s) <= MAX_PIXELS)
+        .expect("a stride")
+}
+
+/// `pixels` as an image of one row.
+fn row(pixels: Vec<[f32; 3]>) -> Image {
+    Image {
+        width: pixels.len(),
+        height: 1,
+        pixels,
+    }
 }
 
 /// The centre of each `stride x stride` block of a `width x height` image (clamped to it),
@@ -44,36 +59,29 @@ fn lattice(width: usize, height: usize, stride: usize) -> Vec<[usize; 2]> {
 
 /// The pixels checked of a `width x height` image.
 pub fn lattice_len(width: usize, height: usize) -> usize {
-    let s = stride(width, height);
-    width.div_ceil(s) * height.div_ceil(s)
+    blocks(width, height, stride(width, height))
 }
 
 impl Reference {
-    /// `scene`'s 1 nm render in `space` on its lattice, with the quadratures' observer.
-    pub fn new(scene: &Scene, q: &Quadrature, space: RgbSpace) -> Result<Reference> {
+    /// `scene`'s 1 nm render in `space` on its lattice, for `observer`.
+    pub fn new(scene: &Scene, observer: Observer, space: RgbSpace) -> Result<Reference> {
         let stride = stride(scene.width, scene.height);
         let at = lattice(scene.width, scene.height, stride);
         let grid = WavelengthGrid::new(380.0, 780.0, 1.0)?;
-        let reference = Quadrature::uniform(grid, Rule::Simpson, q.observer())?;
-        let pixels = scene.render_cpu_pixels(&reference, space, &at)?;
+        let reference = Quadrature::uniform(grid, Rule::Simpson, observer)?;
+        let one_nm = row(scene.render_cpu_pixels(&reference, space, &at)?);
         Ok(Reference {
-            width: at.len(),
             at,
             stride,
-            pixels,
+            one_nm,
             space,
         })
     }
 
     /// `q`'s render of `scene` against the 1 nm one, on the lattice.
     pub fn check(&self, scene: &Scene, q: &Quadrature) -> Result<ImageCheck> {
-        let row = |pixels: Vec<[f32; 3]>| Image {
-            width: self.width,
-            height: 1,
-            pixels,
-        };
-        let on_q = scene.render_cpu_pixels(q, self.space, &self.at)?;
-        let c = compare(&row(on_q), &row(self.pixels.clone()), &self.space)?;
+        let on_q = row(scene.render_cpu_pixels(q, self.space, &self.at)?);
+        let c = compare(&on_q, &self.one_nm, &self.space)?;
         Ok(ImageCheck {
             max_de2000: c.max,
             mean_de2000: c.mean,
@@ -135,7 +143,7 @@ mod tests {
             vec![[0.3, 0.1, 1.7], [0.2, 1.0, 0.1], [1.0, 0.4, 0.0]],
         )
         .unwrap();
-        let r = Reference::new(&scene, &q, space).unwrap();
+        let r = Reference::new(&scene, Observer::Cie1931, space).unwrap();
         assert_eq!((r.at.len(), r.stride), (24 * 16, 1));
         let got = r.check(&scene, &q).unwrap();
         let grid = WavelengthGrid::new(380.0, 780.0, 1.0).unwrap();

@@ -109,7 +109,7 @@ impl Scene {
                     None => {
                         let pixels = pixels::lattice_len(self.width, self.height);
                         report(&Stage::Image { pixels });
-                        pixels::Reference::new(self, &selection.quadrature, space)?
+                        pixels::Reference::new(self, observer, space)?
                     }
                 };
                 let check = r.check(self, &selection.quadrature)?;
