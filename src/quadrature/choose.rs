@@ -64,6 +64,9 @@ pub struct Selection {
     pub family: Family,
     pub tolerance_de2000: f64,
     pub target_de2000: f64,
+    /// The most nodes the caller allows ([`Options::budget`]).
+    #[serde(rename = "max_nodes")]
+    pub budget: Option<usize>,
     /// The chosen quadrature's largest error over the fit and held-out stimuli.
     pub estimate_de2000: f64,
     pub met: bool,
@@ -189,6 +192,11 @@ pub fn select_reporting(
     report: super::progress::Report,
 ) -> Result<Selection> {
     fit::check_tolerance(opts.tolerance)?;
+    if family == Family::Uniform && opts.budget.is_some() {
+        return Err(Error::invalid(
+            "a budget of nodes applies to the scene's quadrature, not to uniform grids",
+        ));
+    }
     let est = |s: &[Stimulus]| {
         Estimator::new(s, scene.observer, scene.start_nm, scene.end_nm, scene.white)
     };
@@ -203,8 +211,11 @@ pub fn select_reporting(
         Family::Scene => Some(fit::fit_reporting(&fit_set, held.as_ref(), opts, report)?),
         Family::Uniform => None,
     };
+    // A uniform grid beyond the budget is not chosen, however well it does.
+    let within = opts.within_budget(uniform.samples);
+    let uniform_meets = uniform.met && within;
     let (quadrature, estimate_de2000, met, reason) = match &fitted {
-        Some(f) if f.met && (!uniform.met || f.quadrature.len() <= uniform.samples) => (
+        Some(f) if f.met && (!uniform_meets || f.quadrature.len() <= uniform.samples) => (
             f.quadrature.clone(),
             f.estimate_de2000,
             true,
@@ -218,12 +229,23 @@ pub fn select_reporting(
                 }
             ),
         ),
-        Some(f) if !f.met && !uniform.met && f.estimate_de2000 < uniform.estimate_de2000 => (
-            f.quadrature.clone(),
-            f.estimate_de2000,
-            false,
-            "nothing meets the target; the scene fit errs least".into(),
-        ),
+        Some(f)
+            if !(f.met || uniform_meets)
+                && (!within || f.estimate_de2000 < uniform.estimate_de2000) =>
+        {
+            (
+                f.quadrature.clone(),
+                f.estimate_de2000,
+                false,
+                match opts.budget {
+                    Some(b) => format!(
+                        "no quadrature of at most {b} nodes meets the target; of those, the \
+                         scene fit errs least"
+                    ),
+                    None => "nothing meets the target; the scene fit errs least".into(),
+                },
+            )
+        }
         Some(f) => (
             uniform.quadrature.clone(),
             uniform.estimate_de2000,
@@ -250,6 +272,7 @@ pub fn select_reporting(
         family,
         tolerance_de2000: opts.tolerance,
         target_de2000: opts.target(),
+        budget: opts.budget,
         estimate_de2000,
         met,
         reason,
@@ -322,6 +345,46 @@ pub fn smooth_reflectances(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// With a budget below what the tolerance needs, the uniform grid that meets it is not
+    /// chosen: the scene's best within the budget is, and the choice says it misses.
+    #[test]
+    fn a_budget_keeps_the_choice_within_it() {
+        let fl2 = crate::data::spectrum("FL2").unwrap().data;
+        let red = crate::data::spectrum("colorchecker:red").unwrap().data;
+        let colour = Stimulus::new(
+            "red under FL2",
+            fl2,
+            crate::tradeoff::Surface::Reflectance(red),
+        );
+        let (fit, held_out) = for_colour(colour, "FL2").unwrap();
+        let scene = Scene {
+            fit: &fit,
+            held_out: &held_out,
+            observer: Observer::Cie1931,
+            start_nm: 380.0,
+            end_nm: 780.0,
+            white: White::OwnLight,
+        };
+        let free = select(&scene, Family::Scene, &Options::new(0.5).unwrap()).unwrap();
+        let n = free.quadrature.len();
+        assert!(free.met && free.kind == Kind::Scene && n > 3, "{free:?}");
+        let tight = select(
+            &scene,
+            Family::Scene,
+            &Options::with_budget(0.5, 3).unwrap(),
+        )
+        .unwrap();
+        assert!(tight.uniform.met && tight.uniform.samples > 3);
+        assert!(
+            tight.kind == Kind::Scene && tight.quadrature.len() <= 3 && !tight.met,
+            "{tight:?}"
+        );
+        assert!(tight.reason.contains("at most 3 nodes"), "{}", tight.reason);
+        assert_eq!(tight.budget, Some(3));
+        let uniform = Options::with_budget(0.5, 3).unwrap();
+        assert!(select(&scene, Family::Uniform, &uniform).is_err());
+    }
 
     #[test]
     fn the_lattice_reads_as_english() {

@@ -55,20 +55,42 @@ pub struct Options {
     pub margin: f64,
     /// Give up (and report the best found) beyond this many nodes.
     pub max_nodes: usize,
+    /// A renderer's fixed wavelength budget (4 or 8 SIMD lanes, say): no quadrature of more
+    /// nodes is chosen. Where the fit needs more, the best set of exactly this many is searched
+    /// from fresh starts ([`within_budget`]), and where it misses the target the choice says by
+    /// how much. A budget the fit does not need changes nothing.
+    pub budget: Option<usize>,
 }
 
 impl Options {
-    /// The defaults for a tolerance: margin 0.8, at most 40 nodes.
+    /// The defaults for a tolerance: margin 0.8, at most 40 nodes, no budget.
     pub fn new(tolerance: f64) -> Result<Options> {
         check_tolerance(tolerance)?;
         Ok(Options {
             tolerance,
             margin: 0.8,
             max_nodes: 40,
+            budget: None,
+        })
+    }
+    /// The defaults with at most `nodes` nodes (see [`Options::budget`]).
+    pub fn with_budget(tolerance: f64, nodes: usize) -> Result<Options> {
+        if nodes == 0 {
+            return Err(Error::invalid(
+                "a budget of 0 wavelengths: a quadrature needs at least 1",
+            ));
+        }
+        Ok(Options {
+            budget: Some(nodes),
+            ..Options::new(tolerance)?
         })
     }
     pub fn target(&self) -> f64 {
         self.margin * self.tolerance
+    }
+    /// Whether a quadrature of `nodes` nodes is within the budget.
+    pub fn within_budget(&self, nodes: usize) -> bool {
+        self.budget.is_none_or(|b| nodes <= b)
     }
 }
 
@@ -183,15 +205,53 @@ pub fn fit_reporting(
         ));
     }
     let p = Problem::new(train)?;
-    let line_nodes = lines(train);
+    let mut line_nodes = lines(train);
+    line_nodes.truncate(opts.max_nodes);
     let target = opts.target();
-    let mut cols = line_nodes.clone();
-    cols.truncate(opts.max_nodes);
+    let greedy = greedy(&p, held_out, &line_nodes, opts, report)?;
+    let mut best = greedy.best;
+    if best.max() <= target {
+        best = prune(&p, held_out, best, target, &line_nodes, report)?;
+        best = reseed(&p, held_out, best, target, &line_nodes, report)?;
+    }
+    if let Some(b) = opts.budget.filter(|&b| best.cols.len() > b) {
+        best = within_budget(&p, held_out, b, &line_nodes, greedy.within, target, report)?;
+    }
+    report(&Stage::Reweighing {
+        nodes: best.cols.len(),
+    });
+    let best = reweigh(&p, held_out, best)?;
+    let mut choice = best.into_choice(train, held_out, opts, &line_nodes);
+    choice.tried = greedy.tried;
+    Ok(choice)
+}
+
+/// What the greedy stage found: the node set with the smallest largest error, the same among
+/// the sets within the budget (if there is one), and every node count on the way.
+struct Greedy {
+    best: Candidate,
+    within: Option<Candidate>,
+    tried: Vec<Tried>,
+}
+
+/// The greedy stage: from the lines, the node that lowers the largest error most is added and
+/// the nodes moved into place, until the largest error is [`OVERSHOOT`] of the target, stops
+/// falling for [`PATIENCE`] nodes, or the nodes reach [`Options::max_nodes`].
+fn greedy(
+    p: &Problem,
+    held_out: Option<&Estimator>,
+    line_nodes: &[usize],
+    opts: &Options,
+    report: Report,
+) -> Result<Greedy> {
+    let target = opts.target();
+    let mut cols = line_nodes.to_vec();
     let mut tried = Vec::new();
     let mut best: Option<Candidate> = None;
+    let mut within: Option<Candidate> = None;
     let mut since_best = 0;
     loop {
-        if let Some(c) = Candidate::new(&p, held_out, &cols, None)? {
+        if let Some(c) = Candidate::new(p, held_out, &cols, None)? {
             tried.push(Tried {
                 nodes: cols.len(),
                 fit_max: c.fit_max,
@@ -203,6 +263,10 @@ pub fn fit_reporting(
             });
             // Beyond the target, a few more nodes give pruning room to choose from.
             let done = c.max() <= OVERSHOOT * target;
+            let in_budget = opts.budget.is_some_and(|b| cols.len() <= b);
+            if in_budget && within.as_ref().is_none_or(|w| c.max() < w.max()) {
+                within = Some(c.clone());
+            }
             if best.as_ref().is_none_or(|b| c.max() < 0.99 * b.max()) {
                 best = Some(c);
                 since_best = 0;
@@ -217,27 +281,63 @@ pub fn fit_reporting(
         if cols.len() >= opts.max_nodes {
             break;
         }
-        let Some(j) = next_node(&p, held_out, &cols, best.as_ref())? else {
+        let Some(j) = next_node(p, held_out, &cols, best.as_ref())? else {
             break;
         };
         cols.push(j);
         cols.sort_unstable();
-        refine(&p, &mut cols, &line_nodes);
+        refine(p, &mut cols, line_nodes);
     }
-    let mut best = best.ok_or_else(|| {
+    let best = best.ok_or_else(|| {
         Error::invalid("no node set gives finite colours: the lights have no visible energy")
     })?;
-    if best.max() <= target {
-        best = prune(&p, held_out, best, target, &line_nodes, report)?;
-        best = reseed(&p, held_out, best, target, &line_nodes, report)?;
+    Ok(Greedy {
+        best,
+        within,
+        tried,
+    })
+}
+
+/// The fit came out beyond the `budget`: the best set of exactly the budget from fresh starts
+/// ([`best_of_seeds`]), or the greedy's best `within` it if that errs less. The seeds keep the
+/// lines where the budget leaves room beside them, and are also searched without them (a
+/// budget as small as a lamp's lines is better spent on the continuum too: FL2's three lines
+/// alone err 19.8 on `color FL2 --tolerance 0.5`'s colours). Where the best meets the target
+/// after all, it is pruned and reseeded as a fit is.
+fn within_budget(
+    p: &Problem,
+    held_out: Option<&Estimator>,
+    budget: usize,
+    line_nodes: &[usize],
+    within: Option<Candidate>,
+    target: f64,
+    report: Report,
+) -> Result<Candidate> {
+    let mut fixings: Vec<&[usize]> = vec![&[]];
+    if !line_nodes.is_empty() && line_nodes.len() < budget {
+        fixings.insert(0, line_nodes);
     }
-    report(&Stage::Reweighing {
-        nodes: best.cols.len(),
-    });
-    let best = reweigh(&p, held_out, best)?;
-    let mut choice = best.into_choice(train, held_out, opts, &line_nodes);
-    choice.tried = tried;
-    Ok(choice)
+    let mut best = within;
+    for &fixed in &fixings {
+        let kept = best.as_ref().map_or(f64::INFINITY, Candidate::max);
+        let searched = best_of_seeds(p, held_out, budget, fixed, f64::INFINITY, kept, report)?;
+        if let Some(c) = searched.filter(|c| c.max() < kept) {
+            best = Some(c);
+        }
+    }
+    let best = best
+        .ok_or_else(|| Error::invalid(format!("no set of {budget} nodes gives finite colours")))?;
+    if best.max() > target {
+        return Ok(best);
+    }
+    // Fewer nodes, keeping the lines the fit started from where they are among them.
+    let fixed: Vec<usize> = line_nodes
+        .iter()
+        .copied()
+        .filter(|j| best.cols.contains(j))
+        .collect();
+    let best = prune(p, held_out, best, target, &fixed, report)?;
+    reseed(p, held_out, best, target, &fixed, report)
 }
 
 /// A node set with its minimax weights and errors.
@@ -625,10 +725,8 @@ fn seeds(p: &Problem, fixed: &[usize], count: usize) -> Vec<Vec<usize>> {
 
 /// After pruning: one node fewer, from fresh starts. Greedy nodes and their pruning keep the
 /// shape of the sets they grew from; a smooth scene is often better served by nodes spread
-/// evenly over the span the observer sees. Per node count, the [`seeds`] are ranked by a quick
-/// minimax, the [`SEEDS_JUDGED`] best judged fully, the [`SEEDS_DESCENDED`] best of those
-/// improved by [`exchange`] and by [`descend`] and [`reweigh`]ed, and the best that meets the
-/// target is kept, until none does.
+/// evenly over the span the observer sees. Per node count, the best of the [`seeds`]
+/// ([`best_of_seeds`]) is kept while it meets the target.
 fn reseed(
     p: &Problem,
     held_out: Option<&Estimator>,
@@ -638,52 +736,69 @@ fn reseed(
     report: Report,
 ) -> Result<Candidate> {
     while best.cols.len() > fixed.len() + 2 {
-        let mut quick: Vec<(Vec<usize>, f64)> = seeds(p, fixed, best.cols.len() - 1)
-            .into_par_iter()
-            .filter_map(|c| {
-                let m =
-                    p.minimax_within(&c, None, QUICK_LAWSON, f64::INFINITY, Metric::Channels)?;
-                Some((c, m.max))
-            })
-            .collect();
-        quick.sort_by(|a, b| a.1.total_cmp(&b.1));
-        quick.truncate(SEEDS_JUDGED);
-        let judged = judge_all(p, held_out, quick.into_iter().map(|(c, _)| c).collect())?;
-        // Too far for a descent to bring within the target: fewer nodes will not do.
-        if judged.first().is_none_or(|c| c.max() > SEED_REACH * target) {
-            break;
-        }
-        let mut found: Option<Candidate> = None;
-        let of = judged.len().min(SEEDS_DESCENDED);
-        for (k, seed) in judged.into_iter().take(SEEDS_DESCENDED).enumerate() {
-            let stage = |search| Stage::Reseeding {
-                nodes: seed.cols.len(),
-                seed: k + 1,
-                of,
-                search,
-                kept: best.max(),
-            };
-            // Two searches from the seed: a wide exchange ranked by a cheap score (pigments'
-            // smooth landscapes) and a descent judging every move (films' abrupt ones).
-            report(&stage("exchange"));
-            let wide = exchange(p, held_out, seed.clone(), fixed)?;
-            report(&stage("descent"));
-            let fine = descend(p, held_out, seed, fixed)?;
-            let c = reweigh(
-                p,
-                held_out,
-                if wide.max() < fine.max() { wide } else { fine },
-            )?;
-            if c.max() <= target && found.as_ref().is_none_or(|f| c.max() < f.max()) {
-                found = Some(c);
-            }
-        }
-        match found {
-            Some(c) => best = c,
-            None => break,
+        let count = best.cols.len() - 1;
+        let reach = SEED_REACH * target;
+        match best_of_seeds(p, held_out, count, fixed, reach, best.max(), report)? {
+            Some(c) if c.max() <= target => best = c,
+            _ => break,
         }
     }
     Ok(best)
+}
+
+/// The best set of `count` nodes from fresh starts: the [`seeds`] ranked by a quick minimax,
+/// the [`SEEDS_JUDGED`] best judged fully, and the [`SEEDS_DESCENDED`] best of those improved
+/// by [`exchange`] and by [`descend`] and [`reweigh`]ed. None where no seed can be solved, or
+/// where the best judged seed errs beyond `reach` (too far for a descent to bring within it).
+/// `kept` is the largest error of the set the caller holds, for the report.
+fn best_of_seeds(
+    p: &Problem,
+    held_out: Option<&Estimator>,
+    count: usize,
+    fixed: &[usize],
+    reach: f64,
+    kept: f64,
+    report: Report,
+) -> Result<Option<Candidate>> {
+    let mut quick: Vec<(Vec<usize>, f64)> = seeds(p, fixed, count)
+        .into_par_iter()
+        .filter_map(|c| {
+            let m = p.minimax_within(&c, None, QUICK_LAWSON, f64::INFINITY, Metric::Channels)?;
+            Some((c, m.max))
+        })
+        .collect();
+    quick.sort_by(|a, b| a.1.total_cmp(&b.1));
+    quick.truncate(SEEDS_JUDGED);
+    let judged = judge_all(p, held_out, quick.into_iter().map(|(c, _)| c).collect())?;
+    if judged.first().is_none_or(|c| c.max() > reach) {
+        return Ok(None);
+    }
+    let mut found: Option<Candidate> = None;
+    let of = judged.len().min(SEEDS_DESCENDED);
+    for (k, seed) in judged.into_iter().take(SEEDS_DESCENDED).enumerate() {
+        let stage = |search| Stage::Reseeding {
+            nodes: seed.cols.len(),
+            seed: k + 1,
+            of,
+            search,
+            kept,
+        };
+        // Two searches from the seed: a wide exchange ranked by a cheap score (pigments'
+        // smooth landscapes) and a descent judging every move (films' abrupt ones).
+        report(&stage("exchange"));
+        let wide = exchange(p, held_out, seed.clone(), fixed)?;
+        report(&stage("descent"));
+        let fine = descend(p, held_out, seed, fixed)?;
+        let c = reweigh(
+            p,
+            held_out,
+            if wide.max() < fine.max() { wide } else { fine },
+        )?;
+        if found.as_ref().is_none_or(|f| c.max() < f.max()) {
+            found = Some(c);
+        }
+    }
+    Ok(found)
 }
 
 /// How far (nm) and in what steps an exchange moves a node.
@@ -896,6 +1011,42 @@ mod tests {
         };
         let c = fit(&fit_set, Some(&held), &starved).unwrap();
         assert!(!c.met && c.estimate_de2000 > opts.tolerance && c.quadrature.len() <= 2);
+    }
+
+    /// A budget the fit does not need changes nothing; a tighter one bounds the nodes, says it
+    /// misses, and keeps at least as good a set as the greedy stage found within it.
+    #[test]
+    fn a_budget_bounds_the_nodes_and_a_tight_one_reports_the_miss() {
+        let thicknesses: Vec<f64> = (0..=12).map(|i| 150.0 + 25.0 * i as f64).collect();
+        let fit_set = estimator(&films(&thicknesses, &[0.0, 40.0, 70.0]));
+        let opts = Options::new(0.5).unwrap();
+        let free = fit(&fit_set, None, &opts).unwrap();
+        let n = free.quadrature.len();
+        assert!(free.met && n > 5, "{n} nodes: {free:?}");
+        let roomy = fit(&fit_set, None, &Options::with_budget(0.5, n).unwrap()).unwrap();
+        assert_eq!(roomy.quadrature.nodes_nm(), free.quadrature.nodes_nm());
+        let b = n - 2;
+        let tight = fit(&fit_set, None, &Options::with_budget(0.5, b).unwrap()).unwrap();
+        assert!(tight.quadrature.len() <= b, "{}", tight.quadrature);
+        assert!(
+            !tight.met && tight.estimate_de2000 > opts.target(),
+            "{tight:?}"
+        );
+        // The estimate is the quadrature's own error over the stimuli.
+        let (_, max, _) = worst(&fit_set.errors(&tight.quadrature).unwrap());
+        assert!((max - tight.estimate_de2000).abs() < 1e-9 * max, "{max}");
+        let greedy_within = tight
+            .tried
+            .iter()
+            .filter(|t| t.nodes <= b)
+            .map(|t| t.fit_max)
+            .fold(f64::INFINITY, f64::min);
+        assert!(
+            tight.estimate_de2000 <= greedy_within,
+            "{} against the greedy's {greedy_within}",
+            tight.estimate_de2000
+        );
+        assert!(Options::with_budget(0.5, 0).is_err());
     }
 
     #[test]
