@@ -112,6 +112,54 @@ fn non_finite_and_extreme_arguments_name_the_flag() {
             vec!["color", "FL2", "--tolerance", "1e308"],
             vec!["--tolerance 1e308", "100"],
         ),
+        // A budget of wavelengths: at least one, for the scene's quadrature, with a tolerance.
+        (
+            vec![
+                "render",
+                "--size",
+                "8x8",
+                "--tolerance",
+                "0.5",
+                "--max-nodes",
+                "0",
+                "-o",
+                &x_png,
+            ],
+            vec!["--max-nodes 0", "at least 1"],
+        ),
+        (
+            vec![
+                "render",
+                "--size",
+                "8x8",
+                "--tolerance",
+                "0.5",
+                "--max-nodes",
+                "4",
+                "--quadrature",
+                "uniform",
+                "-o",
+                &x_png,
+            ],
+            vec!["--max-nodes", "--samples"],
+        ),
+        (
+            vec![
+                "color",
+                "FL2",
+                "--tolerance",
+                "0.5",
+                "--max-nodes",
+                "4",
+                "--quadrature",
+                "uniform",
+            ],
+            vec!["--max-nodes", "--samples"],
+        ),
+        (
+            vec!["color", "FL2", "--max-nodes", "4"],
+            vec!["--tolerance"],
+        ),
         // An output named for another format than the one written.
         (
             vec!["convert", &sunrise, "-o", &x_png],

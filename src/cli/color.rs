@@ -1,14 +1,13 @@
 //! `specmap color`: the colour of a light, or of a reflectance under a light.
 
 use super::outln;
-use super::render::QuadratureArg;
+use super::render::{tolerance_options, QuadratureArg};
 use super::SpaceArg;
 use clap::Args;
 use specmap::colorimetry::{cct, srgb8, Cmfs, Lab, Observer, RgbSpace, Xyz, D65_XY};
 use specmap::data;
 use specmap::quadrature::choose::{self, Family, Selection};
 use specmap::quadrature::estimate::White;
-use specmap::quadrature::fit::Options;
 use specmap::quadrature::Quadrature;
 use specmap::spectrum::{Interpolation, Rule};
 use specmap::tradeoff::{choose_grid, GridChoice, Stimulus, Surface};
@@ -38,6 +37,10 @@ pub struct ColorArgs {
     /// for its light, the ColorChecker under that light (see --quadrature); and report it.
     #[arg(long, value_name = "DE")]
     tolerance: Option<f64>,
+    /// With --tolerance: use at most N wavelengths (a renderer's fixed budget). Where no
+    /// quadrature that small meets the tolerance, the best N fitted, with how far it misses.
+    #[arg(long, value_name = "N", requires = "tolerance")]
+    max_nodes: Option<usize>,
     /// `scene` (the default with --tolerance) fits nodes and weights to the light and the
     /// colours under it; `uniform` is --range and --rule (with --tolerance: the coarsest step
     /// of the colour alone); `meyer` is Meyer's four-wavelength Gaussian quadrature.
@@ -203,7 +206,12 @@ fn quadrature_for(
 ) -> anyhow::Result<(Quadrature, Option<GridChoice>, Option<Selection>)> {
     let range = a.spectral.range;
     let (start, end) = (range.start_nm(), range.end_nm());
-    Ok(match (a.tolerance, a.quadrature) {
+    // A budget of nodes with uniform grids is refused before any work.
+    let opts = a
+        .tolerance
+        .map(|t| tolerance_options(t, a.max_nodes, a.quadrature))
+        .transpose()?;
+    Ok(match (opts, a.quadrature) {
         (None, Some(QuadratureArg::Scene)) => anyhow::bail!(
             "--quadrature scene fits the wavelengths to a colour tolerance: give --tolerance \
              (e.g. --tolerance 0.5)"
@@ -213,16 +221,16 @@ fn quadrature_for(
         ),
         (None, Some(QuadratureArg::Meyer)) => (Quadrature::meyer(observer)?, None, None),
         (None, _) => (Quadrature::uniform(range, rule, observer)?, None, None),
-        (Some(tolerance), Some(QuadratureArg::Uniform)) => {
+        (Some(opts), Some(QuadratureArg::Uniform)) => {
             let one = std::slice::from_ref(stimulus);
-            let c = choose_grid(one, observer, start, end, rule, tolerance)?;
+            let c = choose_grid(one, observer, start, end, rule, opts.tolerance)?;
             (
                 Quadrature::uniform(c.chosen, rule, observer)?,
                 Some(c),
                 None,
             )
         }
-        (Some(tolerance), _) => {
+        (Some(opts), _) => {
             let (fit, held_out) = choose::for_colour(stimulus.clone(), light_label)?;
             let scene = choose::Scene {
                 fit: &fit,
@@ -232,7 +240,7 @@ fn quadrature_for(
                 end_nm: end,
                 white: White::OwnLight,
             };
-            let s = choose::select(&scene, Family::Scene, &Options::new(tolerance)?)?;
+            let s = choose::select(&scene, Family::Scene, &opts)?;
             (s.quadrature.clone(), None, Some(s))
         }
     })

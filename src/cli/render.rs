@@ -81,6 +81,11 @@ pub struct RenderArgs {
     /// this CIEDE2000 of the 1 nm render, and report it.
     #[arg(long, value_name = "DE", conflicts_with_all = ["step", "samples"])]
     tolerance: Option<f64>,
+    /// With --tolerance: use at most N wavelengths (a renderer's fixed budget, e.g. 4 or 8
+    /// SIMD lanes). Where no quadrature that small meets the tolerance, the scene's best N
+    /// (searched from fresh starts), reported with how far it misses, on the image too.
+    #[arg(long, value_name = "N", requires = "tolerance")]
+    max_nodes: Option<usize>,
     /// Which wavelengths and weights: `scene` fits them to the scene (needs --tolerance, and is
     /// its default), `uniform` is the --step/--samples grid (or, with --tolerance, the coarsest
     /// step at its best rule), `meyer` is Meyer's four-wavelength Gaussian quadrature.
@@ -330,7 +335,8 @@ pub fn run(a: RenderArgs) -> anyhow::Result<()> {
         space: RgbSpace::SRGB,
         ..base
     };
-    let (quadrature, selection) = quadrature_for(&scene, &spectral, a.quadrature, a.tolerance)?;
+    let aim = a.tolerance.map(|t| (t, a.max_nodes));
+    let (quadrature, selection) = quadrature_for(&scene, &spectral, a.quadrature, aim)?;
     // The backend.
     let gpu = match a.backend {
         BackendArg::Cpu => None,
@@ -496,16 +502,16 @@ pub fn run(a: RenderArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The quadrature of `--quadrature`, `--tolerance`, `--step`/`--samples` and `--rule`, and what
-/// `--tolerance` chose.
+/// The quadrature of `--quadrature`, `--tolerance` (and `--max-nodes`), `--step`/`--samples`
+/// and `--rule`, and what `--tolerance` chose.
 fn quadrature_for(
     scene: &Scene,
     spectral: &Spectral,
     kind: Option<QuadratureArg>,
-    tolerance: Option<f64>,
+    aim: Option<(f64, Option<usize>)>,
 ) -> anyhow::Result<(Quadrature, Option<Selection>)> {
     let uniform = || Quadrature::uniform(spectral.grid, spectral.rule, spectral.observer);
-    let Some(tolerance) = tolerance else {
+    let Some((tolerance, budget)) = aim else {
         return Ok(match kind {
             Some(QuadratureArg::Scene) => anyhow::bail!(
                 "--quadrature scene fits the wavelengths to a colour tolerance: give --tolerance \
@@ -515,7 +521,7 @@ fn quadrature_for(
             Some(QuadratureArg::Uniform) | None => (uniform()?, None),
         });
     };
-    let opts = Options::new(tolerance)?;
+    let opts = tolerance_options(tolerance, budget, kind)?;
     let family = match kind {
         Some(QuadratureArg::Uniform) => Family::Uniform,
         Some(QuadratureArg::Meyer) => anyhow::bail!(
@@ -525,7 +531,10 @@ fn quadrature_for(
     };
     // A scene's fit takes seconds (half a minute for the cylinders, minutes for a thickness
     // ramp under a photograph): say what is happening, stage by stage.
-    let doing = format!("wavelengths for CIEDE2000 {tolerance}");
+    let doing = match budget {
+        Some(n) => format!("at most {n} wavelengths for CIEDE2000 {tolerance}"),
+        None => format!("wavelengths for CIEDE2000 {tolerance}"),
+    };
     let spinner = std::io::stderr().is_terminal().then(|| {
         let b = indicatif::ProgressBar::new_spinner();
         if let Ok(style) = indicatif::ProgressStyle::with_template("{spinner} {msg} [{elapsed}]") {
@@ -554,17 +563,37 @@ fn quadrature_for(
     Ok((s.quadrature.clone(), Some(s)))
 }
 
+/// The fit's options for `--tolerance` and `--max-nodes`: a budget bounds the scene's
+/// quadrature, not a uniform grid (whose count `--samples` sets).
+pub(crate) fn tolerance_options(
+    tolerance: f64,
+    budget: Option<usize>,
+    kind: Option<QuadratureArg>,
+) -> anyhow::Result<Options> {
+    Ok(match budget {
+        None => Options::new(tolerance)?,
+        Some(0) => anyhow::bail!("--max-nodes 0: a quadrature needs at least 1 wavelength"),
+        Some(_) if kind == Some(QuadratureArg::Uniform) => anyhow::bail!(
+            "--max-nodes bounds the scene's quadrature, not --quadrature uniform (a uniform \
+             grid of N wavelengths is --samples N, without --tolerance)"
+        ),
+        Some(n) => Options::with_budget(tolerance, n)?,
+    })
+}
+
 /// Appends what `--tolerance` chose, and why.
 pub(crate) fn write_selection(out: &mut String, s: &Selection) {
     outln!(
         out,
-        "  quadrature   {}: estimate {:.3} {} target {:.3} (tolerance {} x margin {:.2}); {}",
+        "  quadrature   {}: estimate {:.3} {} target {:.3} (tolerance {} x margin {:.2}{}); {}",
         s.kind,
         s.estimate_de2000,
         if s.met { "<=" } else { "MISSES the" },
         s.target_de2000,
         s.tolerance_de2000,
         s.target_de2000 / s.tolerance_de2000,
+        s.budget
+            .map_or(String::new(), |b| format!(", at most {b} nodes")),
         s.reason
     );
     if let Some(f) = &s.scene {

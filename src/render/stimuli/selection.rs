@@ -104,14 +104,7 @@ impl Scene {
             let every = selection.estimate_de2000;
             // The image itself, where the texels pass.
             if every <= target {
-                let r = match reference.take() {
-                    Some(r) => r,
-                    None => {
-                        let pixels = pixels::lattice_len(self.width, self.height);
-                        report(&Stage::Image { pixels });
-                        pixels::Reference::new(self, observer, space)?
-                    }
-                };
+                let r = self.image_reference(reference.take(), observer, space, report)?;
                 let check = r.check(self, &selection.quadrature)?;
                 reference = Some(r);
                 // Under a map the reason already counts the refits.
@@ -158,7 +151,32 @@ impl Scene {
                 fit_opts.margin *= narrow.clamp(0.7, 0.9);
             }
         }
-        Ok(best.expect("a round ran").1)
+        let mut s = best.expect("a round ran").1;
+        // A miss is final: what its image errs is reported too (no refit follows).
+        if s.image.is_none() {
+            let r = self.image_reference(reference, observer, space, report)?;
+            let check = r.check(self, &s.quadrature)?;
+            on_the_image(&mut s, check, None);
+        }
+        Ok(s)
+    }
+
+    /// The image's 1 nm render on its lattice: `made` if an earlier round made it.
+    fn image_reference(
+        &self,
+        made: Option<pixels::Reference>,
+        observer: Observer,
+        space: RgbSpace,
+        report: Report,
+    ) -> Result<pixels::Reference> {
+        match made {
+            Some(r) => Ok(r),
+            None => {
+                let pixels = pixels::lattice_len(self.width, self.height);
+                report(&Stage::Image { pixels });
+                pixels::Reference::new(self, observer, space)
+            }
+        }
     }
 
     /// One selection over the stimuli with `texels`; under a spectral map, while the fit misses
@@ -205,10 +223,10 @@ fn on_the_image(s: &mut Selection, check: ImageCheck, refits: Option<usize>) {
     s.image = Some(check);
     let max = check.max_de2000;
     let within = max <= s.tolerance_de2000;
-    s.met &= within;
     let lattice = check.lattice();
     let after = refits.map_or(String::new(), |k| format!(" ({})", refit_count(k)));
-    s.reason = if within {
+    s.reason = if within || !s.met {
+        // A miss keeps its reason: the image is what it errs on the pixels.
         format!(
             "{}; the image errs at most {max:.3} on {lattice}{after}",
             s.reason
@@ -219,6 +237,7 @@ fn on_the_image(s: &mut Selection, check: ImageCheck, refits: Option<usize>) {
             nodes_verb(s.quadrature.len(), "err"),
         )
     };
+    s.met &= within;
 }
 
 /// "no refit", "1 refit", "k refits".
