@@ -29,6 +29,7 @@ Examples:
   specmap render --scene ball --env envmaps/sunrise.exr --samples 81 -o ball.exr
   specmap render --scene cylinders --backend cpu --step 5 --json
   specmap render --scene cylinders --tolerance 0.5 --json   # the fewest wavelengths for CIEDE2000 0.5
+  specmap render --scene cylinders --tolerance 0.5 --max-nodes 8   # at most 8: the best 8 if 8 miss
   specmap render --scene ball --light FL2 --quadrature meyer -o meyer.png
   specmap render --scene chart --size 768x512 --exposure -0.5 -o chart.png
   specmap render --scene ball --film 1.38:100,2.1:130 --substrate bk7 -o coated.png
