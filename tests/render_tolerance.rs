@@ -137,43 +137,55 @@ fn a_uniform_choice_meets_the_tolerance_too() {
 }
 
 /// The last check of `--tolerance` is the image itself, rendered on the quadrature and at 1 nm.
-/// A renderer's fixed budget (`render --max-nodes`). The checker spheres under A need 6 nodes at
-/// 0.5; with a budget of 6 the choice is the same, with 5 no quadrature meets the target and
-/// the scene's best 5 are chosen (not the uniform grid that meets it with 21), reported as a
-/// miss with their image's error, which is the error `compare` gives on the full renders.
-#[test]
-fn a_budget_of_nodes_bounds_the_choice_and_a_miss_reports_its_image() {
-    let s = scene(Preset::CheckerSpheres, "A", 48);
-    let with = |budget: usize| {
-        let opts = Options::with_budget(TOL, budget).unwrap();
-        s.choose_quadrature(Observer::Cie1931, RgbSpace::SRGB, Family::Scene, &opts)
-            .unwrap()
-    };
-    let free = choose(&s, Family::Scene);
-    let n = free.quadrature.len();
-    assert!(free.met, "{}", free.reason);
-    let roomy = with(n);
-    assert!(roomy.met, "{}", roomy.reason);
-    assert_eq!(roomy.quadrature.nodes_nm(), free.quadrature.nodes_nm());
-    let tight = with(n - 1);
+/// `s` chosen within `budget` nodes, fewer than it needs: the choice stays within the budget,
+/// says it misses, and reports its image's error as `compare` finds it on the full renders.
+fn a_miss_within(s: &Scene, budget: usize) -> Selection {
+    let opts = Options::with_budget(TOL, budget).unwrap();
+    let c = s
+        .choose_quadrature(Observer::Cie1931, RgbSpace::SRGB, Family::Scene, &opts)
+        .unwrap();
     assert!(
-        !tight.met && tight.kind == Kind::Scene && tight.quadrature.len() < n,
+        !c.met && c.kind == Kind::Scene && c.quadrature.len() <= budget,
         "{}",
-        tight.reason
+        c.reason
     );
-    assert!(tight.uniform.met && tight.uniform.samples >= n);
-    let check = tight.image.expect("a miss reports its image");
-    let full = image_error(&s, &tight.quadrature);
+    let check = c.image.expect("a miss reports its image");
+    let full = image_error(s, &c.quadrature);
     eprintln!(
-        "{n} nodes meet {TOL}; at most {}: estimate {:.3}, image {full:.3} ({})",
-        n - 1,
-        tight.estimate_de2000,
-        tight.reason
+        "at most {budget}: estimate {:.3}, image {full:.3} ({})",
+        c.estimate_de2000, c.reason
     );
     assert!(
         (check.max_de2000 - full).abs() < 1e-9,
         "{check:?} against {full}"
     );
+    c
+}
+
+/// A renderer's fixed budget (`render --max-nodes`). The checker spheres under A need 6 nodes at
+/// 0.5; with a budget of 6 the choice is the same, with 5 no quadrature meets it and the scene's
+/// best 5 are chosen, not the uniform grid that meets it with 21. Under a map of its own
+/// spectra (the FL2 interior, 12 nodes) a budget of 8 is a miss too, taken without refits.
+#[test]
+fn a_budget_of_nodes_bounds_the_choice_and_a_miss_reports_its_image() {
+    let s = scene(Preset::CheckerSpheres, "A", 48);
+    let free = choose(&s, Family::Scene);
+    let n = free.quadrature.len();
+    assert!(free.met, "{}", free.reason);
+    let opts = Options::with_budget(TOL, n).unwrap();
+    let roomy = s
+        .choose_quadrature(Observer::Cie1931, RgbSpace::SRGB, Family::Scene, &opts)
+        .unwrap();
+    assert!(roomy.met, "{}", roomy.reason);
+    assert_eq!(roomy.quadrature.nodes_nm(), free.quadrature.nodes_nm());
+    let tight = a_miss_within(&s, n - 1);
+    assert!(tight.uniform.met && tight.uniform.samples >= n);
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/truth/interior_fl2.spectral.exr");
+    let (lighting, _) = specmap::render::env::load(&path, "D65").unwrap();
+    let s = Preset::Ball.scene(32, 32, "D65", Some(lighting)).unwrap();
+    let c = a_miss_within(&s, 8);
+    assert!(c.reason.contains("no refit"), "{}", c.reason);
 }
 
 /// With a margin of 1.6 the stimuli alone let the chart's image err beyond the tolerance; the

@@ -6,7 +6,9 @@
 //! join the fit and the fit's margin narrows by the gap between its estimate and theirs. The
 //! estimate reported is the largest over every texel. Last, with or without a map, the image
 //! itself is rendered on the quadrature and at 1 nm ([`super::pixels`]); where it errs beyond
-//! the tolerance, the margin narrows by the ratio and the fit runs again.
+//! the tolerance, the margin narrows by the ratio and the fit runs again. A fit that misses its
+//! own target (nothing meets it, or a budget of nodes binds) is final, and its image is checked
+//! for the report.
 
 use super::{coverage, pixels, texels, TexelChoice};
 use crate::colorimetry::{Observer, RgbSpace, Xyz};
@@ -121,9 +123,10 @@ impl Scene {
             if best.as_ref().is_none_or(|b| excess < b.0) {
                 best = Some((excess, selection));
             }
-            // Without a map there are no texels to add: a fit that misses the target itself
-            // (nothing meets it, the scene fit errs least) would only miss a narrower one.
-            if !any_map && every > target {
+            // A fit that misses the target itself (nothing meets it and the scene fit errs
+            // least, or a budget of nodes binds) would only miss a narrower one: neither texels
+            // added nor a refit can help. Without a map, that is every miss.
+            if fitted > target {
                 break;
             }
             if round < REFITS {
@@ -199,7 +202,12 @@ impl Scene {
             };
             let selection = choose::select_reporting(&scene, f.family, f.opts, f.report)?;
             let missed = selection.scene.as_ref().is_some_and(|c| !c.met);
-            if !(own_map && missed && texels.fitted < texels::MAX_FITTED) {
+            // Texels added to the fit cannot buy nodes a budget withholds.
+            let bound = f
+                .opts
+                .budget
+                .is_some_and(|b| selection.quadrature.len() >= b);
+            if !(own_map && missed && !bound && texels.fitted < texels::MAX_FITTED) {
                 return Ok(selection);
             }
             texels.fitted += texels::CHECKED / 2;
