@@ -2,7 +2,10 @@
 //! wavelength) at 128x128 on the CPU renderer and, where a wgpu adapter exists, on the GPU
 //! (compute dispatch until idle, without upload and readback). Then the quadratures
 //! `render --tolerance 0.5` chooses for the ball under D65 and FL2 (the scene's and the uniform
-//! grid at its best rule) and Meyer's, the same way.
+//! grid at its best rule) and Meyer's, the same way. Last, the checker spheres (24 matte
+//! spheres) at 384x256 under A on uniform grids of 2, 6, 21 and 41 wavelengths: a matte pixel
+//! costs little per wavelength, so these frames show what a pixel costs once (its hit, normal,
+//! lookups and RGB), which bounds how much faster fewer wavelengths can render.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use specmap::colorimetry::{Observer, RgbSpace};
@@ -102,5 +105,22 @@ fn quadratures(c: &mut Criterion) {
     }
 }
 
-criterion_group!(benches, bench, quadratures);
+fn matte(c: &mut Criterion) {
+    let scene = Preset::CheckerSpheres
+        .scene(384, 256, "A", None)
+        .expect("preset");
+    let frames: Vec<(usize, Prepared)> = [2, 6, 21, 41]
+        .iter()
+        .map(|&n| {
+            let sp = Spectral::samples(n).expect("grid");
+            (n, Prepared::new(&scene, &sp).expect("prepared"))
+        })
+        .collect();
+    cpu_group(c, "render checker-spheres 384x256 cpu", &frames);
+    if let Ok(gpu) = Gpu::new() {
+        gpu_group(c, &gpu, "render checker-spheres 384x256 gpu", &frames);
+    }
+}
+
+criterion_group!(benches, bench, quadratures, matte);
 criterion_main!(benches);

@@ -9,7 +9,7 @@ use super::prepare::{
 use super::Image;
 use crate::thinfilm::{Film, Incidence, Polarization};
 use rayon::prelude::*;
-use std::f64::consts::PI;
+use std::f64::consts::{FRAC_1_PI, PI};
 
 /// Renders the prepared scene.
 pub fn render(p: &Prepared) -> Image {
@@ -61,7 +61,7 @@ fn candidates(p: &Prepared, x: usize, y: usize) -> &[u32] {
 }
 
 /// The nearest hit along the ray down −Z through (px, py) among the objects `candidates`
-/// (indices into `objects`, in order): object index, normal.
+/// (indices into `objects`, in order): object index, unit normal.
 pub fn hit(
     objects: &[GpuObject],
     candidates: &[u32],
@@ -80,7 +80,8 @@ pub fn hit(
                 let q = r * r - dx * dx - dy * dy;
                 (q >= 0.0).then(|| {
                     let s = q.sqrt();
-                    (p0[2] + s, [dx / r, dy / r, s / r])
+                    let k = 1.0 / r;
+                    (p0[2] + s, [dx * k, dy * k, s * k])
                 })
             }
             CYLINDER_X => {
@@ -88,7 +89,8 @@ pub fn hit(
                 let q = r * r - dy * dy;
                 ((px - p0[0]).abs() <= p1[0] && q >= 0.0).then(|| {
                     let s = q.sqrt();
-                    (p0[2] + s, [0.0, dy / r, s / r])
+                    let k = 1.0 / r;
+                    (p0[2] + s, [0.0, dy * k, s * k])
                 })
             }
             QUAD => ((px - p0[0]).abs() <= p1[0] && (py - p0[1]).abs() <= p1[1])
@@ -102,10 +104,8 @@ pub fn hit(
             }
         }
     }
-    best.map(|(i, n)| {
-        let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-        (i, n.map(|c| c / len))
-    })
+    // Each normal is unit already: (dx, dy, s) / r with s^2 = r^2 - dx^2 - dy^2, to rounding.
+    best
 }
 
 /// A pixel's coefficients, kept between the pixels of a row so that none allocates: per map
@@ -137,21 +137,21 @@ fn constant_maps(p: &Prepared) -> Vec<Option<Terms>> {
         .collect()
 }
 
-/// The nonzero coefficients of `map` in direction `dir`: `constant`'s if it has them, else
-/// looked up into `out`. A uniform lighting's maps hold one nonzero coefficient, so this
-/// skips the three zero terms of every wavelength's expansion.
+/// The nonzero coefficients of `map` in direction `dir`: `constant`'s if it has them (the
+/// direction is then not computed), else looked up into `out`. A uniform lighting's maps hold
+/// one nonzero coefficient, so this skips the three zero terms of every wavelength's expansion.
 fn map_sample<'a>(
     p: &Prepared,
     constant: &'a [Option<Terms>],
     map: u32,
-    dir: [f64; 3],
+    dir: impl FnOnce() -> [f64; 3],
     lookup: &mut Vec<f64>,
     out: &'a mut Terms,
 ) -> &'a [(usize, f64)] {
     if let Some(terms) = &constant[map as usize] {
         return terms;
     }
-    sample_terms(p, map, dir, lookup, out);
+    sample_terms(p, map, dir(), lookup, out);
     out
 }
 
@@ -186,7 +186,8 @@ pub fn pinhole_direction(t: f64, width: usize, height: usize, x: usize, y: usize
     let u = (x as f64 + 0.5 - 0.5 * w) / (0.5 * h) * t;
     let v = -(y as f64 + 0.5 - 0.5 * h) / (0.5 * h) * t;
     let n = (u * u + v * v + 1.0).sqrt();
-    [u / n, v / n, -1.0 / n]
+    let k = 1.0 / n;
+    [u * k, v * k, -k]
 }
 
 fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
@@ -255,7 +256,7 @@ fn pixel(
         None if p.params.flags & HIDE_BACKGROUND != 0 => {}
         None => {
             let lt = &p.lightings[p.params.background as usize];
-            let ct = map_sample(p, constant, lt.background_map, d(), lookup, ct);
+            let ct = map_sample(p, constant, lt.background_map, d, lookup, ct);
             for i in 0..n_wl {
                 add(i, expand(ct, lt.spectra, i));
             }
@@ -265,11 +266,14 @@ fn pixel(
             let m = &p.materials[o.material as usize];
             let lt = &p.lightings[o.lighting as usize];
             let cos_v = n[2].clamp(0.0, 1.0);
-            let rv = [
-                2.0 * n[2] * n[0],
-                2.0 * n[2] * n[1],
-                2.0 * n[2] * n[2] - 1.0,
-            ];
+            // The mirror direction, for the specular paths only.
+            let rv = || {
+                [
+                    2.0 * n[2] * n[0],
+                    2.0 * n[2] * n[1],
+                    2.0 * n[2] * n[2] - 1.0,
+                ]
+            };
             let [kd, ks, shininess, _] = m.coef.map(|v| v as f64);
             let transparent = m.flags & TRANSPARENT != 0;
             let film = (m.flags & HAS_FILM != 0)
@@ -278,14 +282,14 @@ fn pixel(
             // A matte surface (no film, ks = 0) reflects nothing specularly: its specular
             // lighting is not looked up (most of the chart: the patches and the backdrop).
             let specular = film.is_some() || ks != 0.0;
-            let cd = map_sample(p, constant, lt.diffuse_map, n, lookup, cd);
+            let cd = map_sample(p, constant, lt.diffuse_map, || n, lookup, cd);
             let cs = if specular {
                 map_sample(p, constant, o.spec_map, rv, lookup, cs)
             } else {
                 &[]
             };
             let ct = if transparent {
-                map_sample(p, constant, lt.background_map, d(), lookup, ct)
+                map_sample(p, constant, lt.background_map, d, lookup, ct)
             } else {
                 &[]
             };
@@ -293,11 +297,11 @@ fn pixel(
                 let s = lt.sun.map(|v| v as f64);
                 let l = [s[0], s[1], s[2]];
                 let s_lobe = if specular {
-                    s[3] * (shininess + 1.0) / (2.0 * PI) * lobe(dot(rv, l), shininess)
+                    s[3] * (shininess + 1.0) / (2.0 * PI) * lobe(dot(rv(), l), shininess)
                 } else {
                     0.0
                 };
-                (s[3] * dot(n, l).max(0.0) / PI, s_lobe)
+                (s[3] * dot(n, l).max(0.0) * FRAC_1_PI, s_lobe)
             } else {
                 (0.0, 0.0)
             };
@@ -334,7 +338,8 @@ fn pixel(
         }
     }
     let rgb = p.params.rgb;
-    [0, 1, 2].map(|r| {
+    let row = |r: usize| {
         (rgb[r][0] as f64 * xyz[0] + rgb[r][1] as f64 * xyz[1] + rgb[r][2] as f64 * xyz[2]) as f32
-    })
+    };
+    [row(0), row(1), row(2)]
 }
