@@ -17,6 +17,9 @@
 //! 6. **final weights**: the kept nodes' weights solved again under CIEDE2000's full metric and
 //!    by the p-norm continuation ([`super::pnorm`]), kept if the largest error drops.
 //!
+//! With a budget of nodes ([`Options::budget`]) a fit that comes out beyond it searches for the
+//! best set of exactly the budget, before its final weights ([`within_budget`]).
+//!
 //! The target is `margin * tolerance`: the stimuli sample the scene's angles, thicknesses and
 //! pigments, and the image mixes them, so the estimate keeps room for what the samples miss.
 
@@ -319,9 +322,10 @@ fn within_budget(
     }
     let mut best = within;
     for &fixed in &fixings {
-        let kept = best.as_ref().map_or(f64::INFINITY, Candidate::max);
+        let kept = best.as_ref();
         let searched = best_of_seeds(p, held_out, budget, fixed, f64::INFINITY, kept, report)?;
-        if let Some(c) = searched.filter(|c| c.max() < kept) {
+        let max = kept.map_or(f64::INFINITY, Candidate::max);
+        if let Some(c) = searched.filter(|c| c.max() < max) {
             best = Some(c);
         }
     }
@@ -738,7 +742,7 @@ fn reseed(
     while best.cols.len() > fixed.len() + 2 {
         let count = best.cols.len() - 1;
         let reach = SEED_REACH * target;
-        match best_of_seeds(p, held_out, count, fixed, reach, best.max(), report)? {
+        match best_of_seeds(p, held_out, count, fixed, reach, Some(&best), report)? {
             Some(c) if c.max() <= target => best = c,
             _ => break,
         }
@@ -750,16 +754,17 @@ fn reseed(
 /// the [`SEEDS_JUDGED`] best judged fully, and the [`SEEDS_DESCENDED`] best of those improved
 /// by [`exchange`] and by [`descend`] and [`reweigh`]ed. None where no seed can be solved, or
 /// where the best judged seed errs beyond `reach` (too far for a descent to bring within it).
-/// `kept` is the largest error of the set the caller holds, for the report.
+/// `kept` is the set the caller holds, for the report.
 fn best_of_seeds(
     p: &Problem,
     held_out: Option<&Estimator>,
     count: usize,
     fixed: &[usize],
     reach: f64,
-    kept: f64,
+    kept: Option<&Candidate>,
     report: Report,
 ) -> Result<Option<Candidate>> {
+    let kept = kept.map(|c| (c.cols.len(), c.max()));
     let mut quick: Vec<(Vec<usize>, f64)> = seeds(p, fixed, count)
         .into_par_iter()
         .filter_map(|c| {

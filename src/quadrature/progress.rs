@@ -10,15 +10,15 @@ pub enum Stage {
     Greedy { nodes: usize, max: f64 },
     /// Pruning, at `nodes` nodes whose largest error is `max`.
     Pruning { nodes: usize, max: f64 },
-    /// Reseeding with `nodes` nodes: seed `seed` of `of` is being searched by `search`
-    /// ("exchange" or "descent"); `kept` is the largest error of the best set kept so far,
-    /// with one node more.
+    /// Reseeding with `nodes` nodes (one fewer than the fit kept, or a budget's count): seed
+    /// `seed` of `of` is being searched by `search` ("exchange" or "descent"); `kept` is the
+    /// node count and largest error of the best set kept so far, if any.
     Reseeding {
         nodes: usize,
         seed: usize,
         of: usize,
         search: &'static str,
-        kept: f64,
+        kept: Option<(usize, f64)>,
     },
     /// The kept nodes' weights are solved once more.
     Reweighing { nodes: usize },
@@ -57,11 +57,13 @@ impl fmt::Display for Stage {
                 of,
                 search,
                 kept,
-            } => write!(
-                f,
-                "{nodes} nodes: seed {seed}/{of}, {search} (kept {} nodes, {kept:.3})",
-                nodes + 1
-            ),
+            } => {
+                write!(f, "{nodes} nodes: seed {seed}/{of}, {search}")?;
+                match kept {
+                    Some((n, e)) => write!(f, " (kept {n} nodes, {e:.3})"),
+                    None => Ok(()),
+                }
+            }
             Stage::Reweighing { nodes } => write!(f, "final weights, {nodes} nodes"),
             Stage::Texels {
                 round,
@@ -107,7 +109,7 @@ mod tests {
             seed: 2,
             of: 3,
             search: "descent",
-            kept: 0.3314,
+            kept: Some((16, 0.3314)),
         };
         assert_eq!(
             s.to_string(),

@@ -120,13 +120,16 @@ impl Scene {
             let image = selection.image.map_or(0.0, |c| c.max_de2000);
             let excess = (every / target).max(image / opts.tolerance);
             let nodes = selection.quadrature.len();
+            // The fit missed its own (perhaps narrowed) target at the budget's limit.
+            let at_budget = opts.budget.is_some_and(|b| nodes >= b)
+                && selection.scene.as_ref().is_some_and(|c| !c.met);
             if best.as_ref().is_none_or(|b| excess < b.0) {
                 best = Some((excess, selection));
             }
             // A fit that misses the target itself (nothing meets it and the scene fit errs
             // least, or a budget of nodes binds) would only miss a narrower one: neither texels
             // added nor a refit can help. Without a map, that is every miss.
-            if fitted > target {
+            if fitted > target || at_budget {
                 break;
             }
             if round < REFITS {
