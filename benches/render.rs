@@ -55,15 +55,20 @@ fn gpu_group<N: std::fmt::Display>(
     g.finish();
 }
 
-fn bench(c: &mut Criterion) {
-    let scene = Preset::Ball.scene(128, 128, "D65", None).expect("preset");
-    let frames: Vec<(usize, Prepared)> = COUNTS
+/// `scene`'s frames on uniform grids of each of `counts` wavelengths.
+fn uniform_frames(scene: &specmap::render::Scene, counts: &[usize]) -> Vec<(usize, Prepared)> {
+    counts
         .iter()
         .map(|&n| {
             let sp = Spectral::samples(n).expect("grid");
-            (n, Prepared::new(&scene, &sp).expect("prepared"))
+            (n, Prepared::new(scene, &sp).expect("prepared"))
         })
-        .collect();
+        .collect()
+}
+
+fn bench(c: &mut Criterion) {
+    let scene = Preset::Ball.scene(128, 128, "D65", None).expect("preset");
+    let frames = uniform_frames(&scene, &COUNTS);
     cpu_group(c, "render ball 128x128 cpu", &frames);
     match Gpu::new() {
         Ok(gpu) => gpu_group(c, &gpu, "render ball 128x128 gpu", &frames),
@@ -109,13 +114,7 @@ fn matte(c: &mut Criterion) {
     let scene = Preset::CheckerSpheres
         .scene(384, 256, "A", None)
         .expect("preset");
-    let frames: Vec<(usize, Prepared)> = [2, 6, 21, 41]
-        .iter()
-        .map(|&n| {
-            let sp = Spectral::samples(n).expect("grid");
-            (n, Prepared::new(&scene, &sp).expect("prepared"))
-        })
-        .collect();
+    let frames = uniform_frames(&scene, &[2, 6, 21, 41]);
     cpu_group(c, "render checker-spheres 384x256 cpu", &frames);
     if let Ok(gpu) = Gpu::new() {
         gpu_group(c, &gpu, "render checker-spheres 384x256 gpu", &frames);
