@@ -893,56 +893,32 @@ fn descend(
     start: Candidate,
     fixed: &[usize],
 ) -> Result<Candidate> {
-    let len = p.est.grid.len();
     let mut cols = start.cols.clone();
     let mut weights = start.quadrature.weights().to_vec();
     let mut rows = start.rows.clone();
     let mut max = start.fit_max;
-    for (reach, step) in DESCENT_PASSES {
-        for _ in 0..12 {
-            let mut improved = false;
-            for i in 0..cols.len() {
-                let at = cols[i];
-                if fixed.contains(&at) {
-                    continue;
-                }
-                let lo = at.saturating_sub(reach);
-                let hi = (at + reach).min(len - 1);
-                let mut ranked: Vec<(Vec<usize>, Minimax)> = (lo..=hi)
-                    .step_by(step)
-                    .filter(|j| !cols.contains(j))
-                    .collect::<Vec<_>>()
-                    .into_par_iter()
-                    .filter_map(|j| {
-                        let mut c = cols.clone();
-                        c[i] = j;
-                        c.sort_unstable();
-                        let m = p.minimax_within(
-                            &c,
-                            Some(&rows),
-                            QUICK_LAWSON,
-                            GIVE_UP * max,
-                            Metric::Channels,
-                        )?;
-                        Some((c, m))
-                    })
-                    .collect();
-                ranked.sort_by(|a, b| a.1.max.total_cmp(&b.1.max));
-                ranked.truncate(MOVES_JUDGED);
-                let best = ranked
-                    .into_par_iter()
-                    .filter_map(|(c, l)| {
-                        let m = p.minimax_pnorm(&c, &l.weights, QUICK_LEVELS)?;
-                        Some((c, Minimax { rows: l.rows, ..m }))
-                    })
-                    .min_by(|a, b| a.1.max.total_cmp(&b.1.max));
-                if let Some((c, m)) = best.filter(|(_, m)| m.max < 0.999 * max) {
-                    (cols, weights, rows, max) = (c, m.weights, m.rows, m.max);
-                    improved = true;
-                }
-            }
-            if !improved {
+    let n = cols.len();
+    for pass in DESCENT_PASSES {
+        // Rounds over the nodes, at most 12. A node's moves depend only on the nodes and the
+        // weights, so once every node has been tried since the last move the pass is over: the
+        // rest of the round would try each in the same state again and move none.
+        let mut unmoved = 0;
+        for k in 0..12 * n {
+            if unmoved >= n {
                 break;
+            }
+            let i = k % n;
+            let found = if fixed.contains(&cols[i]) {
+                None
+            } else {
+                best_move(p, &cols, i, pass, &rows, max)
+            };
+            match found.filter(|(_, m)| m.max < 0.999 * max) {
+                Some((c, m)) => {
+                    (cols, weights, rows, max) = (c, m.weights, m.rows, m.max);
+                    unmoved = 0;
+                }
+                None => unmoved += 1,
             }
         }
     }
@@ -953,6 +929,51 @@ fn descend(
         Some(c) if c.max() < start.max() => c,
         _ => start,
     })
+}
+
+/// The best move of node `i` of `cols` within `reach` nm at `step` nm (a descent's pass): the
+/// moves ranked by a quick Lawson started from `rows` (given up beyond [`GIVE_UP`] times the
+/// current largest error `max`), the [`MOVES_JUDGED`] best solved by a quick p-norm
+/// continuation; the nodes and weights of the best, if any can be solved.
+fn best_move(
+    p: &Problem,
+    cols: &[usize],
+    i: usize,
+    (reach, step): (usize, usize),
+    rows: &[f64],
+    max: f64,
+) -> Option<(Vec<usize>, Minimax)> {
+    let at = cols[i];
+    let lo = at.saturating_sub(reach);
+    let hi = (at + reach).min(p.est.grid.len() - 1);
+    let mut ranked: Vec<(Vec<usize>, Minimax)> = (lo..=hi)
+        .step_by(step)
+        .filter(|j| !cols.contains(j))
+        .collect::<Vec<_>>()
+        .into_par_iter()
+        .filter_map(|j| {
+            let mut c = cols.to_vec();
+            c[i] = j;
+            c.sort_unstable();
+            let m = p.minimax_within(
+                &c,
+                Some(rows),
+                QUICK_LAWSON,
+                GIVE_UP * max,
+                Metric::Channels,
+            )?;
+            Some((c, m))
+        })
+        .collect();
+    ranked.sort_by(|a, b| a.1.max.total_cmp(&b.1.max));
+    ranked.truncate(MOVES_JUDGED);
+    ranked
+        .into_par_iter()
+        .filter_map(|(c, l)| {
+            let m = p.minimax_pnorm(&c, &l.weights, QUICK_LEVELS)?;
+            Some((c, Minimax { rows: l.rows, ..m }))
+        })
+        .min_by(|a, b| a.1.max.total_cmp(&b.1.max))
 }
 
 #[cfg(test)]
