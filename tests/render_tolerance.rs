@@ -136,14 +136,17 @@ fn a_uniform_choice_meets_the_tolerance_too() {
     assert!(image_error(&s, &c.quadrature) <= TOL);
 }
 
-/// The last check of `--tolerance` is the image itself, rendered on the quadrature and at 1 nm.
+/// `s`'s choice at the tolerance within `budget` nodes.
+fn choose_within(s: &Scene, budget: usize) -> Selection {
+    let opts = Options::with_budget(TOL, budget).unwrap();
+    s.choose_quadrature(Observer::Cie1931, RgbSpace::SRGB, Family::Scene, &opts)
+        .unwrap()
+}
+
 /// `s` chosen within `budget` nodes, fewer than it needs: the choice stays within the budget,
 /// says it misses, and reports its image's error as `compare` finds it on the full renders.
 fn a_miss_within(s: &Scene, budget: usize) -> Selection {
-    let opts = Options::with_budget(TOL, budget).unwrap();
-    let c = s
-        .choose_quadrature(Observer::Cie1931, RgbSpace::SRGB, Family::Scene, &opts)
-        .unwrap();
+    let c = choose_within(s, budget);
     assert!(
         !c.met && c.kind == Kind::Scene && c.quadrature.len() <= budget,
         "{}",
@@ -172,10 +175,7 @@ fn a_budget_of_nodes_bounds_the_choice_and_a_miss_reports_its_image() {
     let free = choose(&s, Family::Scene);
     let n = free.quadrature.len();
     assert!(free.met, "{}", free.reason);
-    let opts = Options::with_budget(TOL, n).unwrap();
-    let roomy = s
-        .choose_quadrature(Observer::Cie1931, RgbSpace::SRGB, Family::Scene, &opts)
-        .unwrap();
+    let roomy = choose_within(&s, n);
     assert!(roomy.met, "{}", roomy.reason);
     assert_eq!(roomy.quadrature.nodes_nm(), free.quadrature.nodes_nm());
     let tight = a_miss_within(&s, n - 1);
@@ -188,6 +188,7 @@ fn a_budget_of_nodes_bounds_the_choice_and_a_miss_reports_its_image() {
     assert!(c.reason.contains("no refit"), "{}", c.reason);
 }
 
+/// The last check of `--tolerance` is the image itself, rendered on the quadrature and at 1 nm.
 /// With a margin of 1.6 the stimuli alone let the chart's image err beyond the tolerance; the
 /// image's check sees it and refits until the image is within the tolerance.
 #[test]
