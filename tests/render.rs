@@ -164,6 +164,8 @@ fn sphere_scene(light: &str, surface: Surface, sun: bool) -> Scene {
         }],
         background: 0,
         backdrop: specmap::render::Backdrop::DEFAULT,
+        orientation: specmap::render::IDENTITY,
+        any_orientation: false,
     }
 }
 

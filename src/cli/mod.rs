@@ -14,6 +14,7 @@ mod rendition;
 mod roundtrip;
 pub mod runtime_dir;
 mod thinfilm;
+mod view;
 
 /// `writeln!` into a String (infallible).
 macro_rules! outln {
@@ -43,6 +44,7 @@ Examples:
   specmap rendition truth.spectral.exr converted.exr --normals up,px,nx,pz,nz
   specmap thinfilm --layers 2.7:270 --substrate 1.45 --json
   specmap render --scene ball --env envmaps/sunrise.exr -o ball.png
+  specmap view --scene cylinders --env envmaps/sunrise.exr --tolerance 0.5
 
 A spectrum is a built-in table name (see `specmap data list`), TABLE:COLUMN
 (e.g. colorchecker:red) or a CSV file with the header `wavelength_nm,<column>,...`.";
@@ -83,6 +85,9 @@ enum Command {
     Rendition(rendition::RenditionArgs),
     /// Integrate a spectral EXR back to RGB and compare with its RGB preview (CIEDE2000).
     Roundtrip(roundtrip::RoundtripArgs),
+    /// The renderer in a window: every `render` option live, wavelengths fitted in the
+    /// background and reused, a pixel's spectrum on a click, the `render` command of the view.
+    View(Box<view::ViewArgs>),
     /// Multilayer thin film: R and T spectra (paper Eq. 2-9, N layers) and the reflected colour.
     Thinfilm(thinfilm::ThinfilmArgs),
 }
@@ -92,7 +97,7 @@ impl Cli {
     pub fn may_use_gpu(&self) -> bool {
         matches!(
             self.command,
-            Command::Demo(_) | Command::Bench(_) | Command::Render(_)
+            Command::Demo(_) | Command::Bench(_) | Command::Render(_) | Command::View(_)
         )
     }
 }
@@ -111,6 +116,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Rendition(a) => rendition::run(a),
         Command::Roundtrip(a) => roundtrip::run(a),
         Command::Thinfilm(a) => thinfilm::run(a),
+        Command::View(a) => view::run(*a),
     }
 }
 
@@ -204,7 +210,7 @@ impl From<ModeArg> for specmap::fit::Mode {
 }
 
 /// CIE standard observers.
-#[derive(Debug, Clone, Copy, ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum ObserverArg {
     /// CIE 1931 2-degree
     Cie1931,
@@ -222,7 +228,7 @@ impl From<ObserverArg> for Observer {
 }
 
 /// Integration rules for the colour integrals.
-#[derive(Debug, Clone, Copy, ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum RuleArg {
     /// h * sum: the paper's rule
     Riemann,

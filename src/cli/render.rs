@@ -18,7 +18,7 @@ use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::time::Instant;
 
-#[derive(Debug, Args)]
+#[derive(Debug, Clone, Args)]
 #[command(after_help = "\
 Without --env the scene is lit by a uniform LIGHT and a key light of the same SPD
 (transparent-ball: a bright sky over a dark floor). --film/--substrate/--diffuse/--kd/--ks/
@@ -37,70 +37,78 @@ Examples:
 pub struct RenderArgs {
     /// The scene preset (the paper's figures 6-9).
     #[arg(long, value_enum, default_value_t = SceneArg::Ball)]
-    scene: SceneArg,
+    pub(crate) scene: SceneArg,
     /// Environment map: an RGB EXR/HDR (converted on the fly), or a basis or spectral EXR from
     /// `specmap convert`.
     #[arg(long, value_name = "MAP")]
-    env: Option<PathBuf>,
+    pub(crate) env: Option<PathBuf>,
     /// What rays that miss every object see: the environment through a 60 degree field of
     /// view (env), the environment straight behind the scene in one colour (flat), or black.
     #[arg(long, value_enum, value_name = "KIND", default_value_t = BackgroundArg::Env)]
-    background: BackgroundArg,
+    pub(crate) background: BackgroundArg,
     /// Main light: the uniform light without --env, the conversion's light with an RGB map
     /// (a spectral or basis map is lit by the spectra it holds; --light does not apply).
     #[arg(long, value_name = "LIGHT", default_value = "D65")]
-    light: String,
+    pub(crate) light: String,
     /// Film layers from the air side, INDEX:THICKNESS_NM[,...] (e.g. 2.7:270).
     #[arg(long, value_name = "N:D[,N:D...]")]
-    film: Option<String>,
+    pub(crate) film: Option<String>,
     /// Substrate index under the film (e.g. 1.45, bk7, 3.1+3.3i).
     #[arg(long, value_name = "N")]
-    substrate: Option<String>,
+    pub(crate) substrate: Option<String>,
     /// Pigment reflectance R_d: TABLE:COLUMN, a CSV, or a constant (e.g. 0.5).
     #[arg(long, value_name = "T:C|CSV")]
-    diffuse: Option<String>,
+    pub(crate) diffuse: Option<String>,
     /// Diffuse coefficient k_d.
     #[arg(long)]
-    kd: Option<f64>,
+    pub(crate) kd: Option<f64>,
     /// Specular coefficient k_s (without a film).
     #[arg(long)]
-    ks: Option<f64>,
+    pub(crate) ks: Option<f64>,
     /// Phong exponent n.
     #[arg(long)]
-    shininess: Option<f64>,
+    pub(crate) shininess: Option<f64>,
     /// Image size WxH (default: the preset's).
     #[arg(long, value_name = "WxH")]
-    size: Option<String>,
+    pub(crate) size: Option<String>,
     /// Wavelength step in nm over 380..780 (must divide 400).
     #[arg(long, value_name = "NM", conflicts_with = "samples")]
-    step: Option<f64>,
+    pub(crate) step: Option<f64>,
     /// Number of wavelengths over 380..780 nm (default 81: 5 nm).
     #[arg(long, value_name = "N")]
-    samples: Option<usize>,
+    pub(crate) samples: Option<usize>,
     /// Choose the cheapest quadrature (fewest wavelengths) that keeps every spectrum the scene
     /// can produce (its lights, pigments and films over their angles and thicknesses) within
     /// this CIEDE2000 of the 1 nm render, and report it.
     #[arg(long, value_name = "DE", conflicts_with_all = ["step", "samples"])]
-    tolerance: Option<f64>,
+    pub(crate) tolerance: Option<f64>,
     /// With --tolerance: use at most N wavelengths (a renderer's fixed budget, e.g. 4 or 8
     /// SIMD lanes). Where no quadrature that small meets the tolerance, the scene's best N
     /// (searched from fresh starts), reported with how far it misses, on the image too.
     #[arg(long, value_name = "N", requires = "tolerance")]
-    max_nodes: Option<usize>,
+    pub(crate) max_nodes: Option<usize>,
     /// Which wavelengths and weights: `scene` fits them to the scene (needs --tolerance, and is
     /// its default), `uniform` is the --step/--samples grid (or, with --tolerance, the coarsest
     /// step at its best rule), `meyer` is Meyer's four-wavelength Gaussian quadrature.
     #[arg(long, value_enum, value_name = "KIND", conflicts_with = "sweep")]
-    quadrature: Option<QuadratureArg>,
+    pub(crate) quadrature: Option<QuadratureArg>,
     /// Integration rule of the colour integrals.
     #[arg(long, value_enum, default_value_t = RuleArg::Riemann)]
-    rule: RuleArg,
+    pub(crate) rule: RuleArg,
     /// Standard observer.
     #[arg(long, value_enum, default_value_t = ObserverArg::Cie1931)]
-    observer: ObserverArg,
+    pub(crate) observer: ObserverArg,
     /// Which renderer: the GPU if an adapter exists (auto), or one of them.
     #[arg(long, value_enum, default_value_t = BackendArg::Auto)]
-    backend: BackendArg,
+    pub(crate) backend: BackendArg,
+    /// The camera orbits the scene by YAW and PITCH degrees, the objects turning with it (a
+    /// turntable): the map and the sun stay with the world. For a sphere, exactly the camera
+    /// orbiting.
+    #[arg(long, value_name = "YAW,PITCH", allow_hyphen_values = true)]
+    pub(crate) orbit: Option<String>,
+    /// Zoom: the view's height divided by F (2 shows half as much, twice as large).
+    #[arg(long, value_name = "F")]
+    pub(crate) zoom: Option<f64>,
     /// Exposure in stops applied to the written image.
     #[arg(
         long,
@@ -108,33 +116,33 @@ pub struct RenderArgs {
         default_value_t = 0.0,
         allow_hyphen_values = true
     )]
-    exposure: f64,
+    pub(crate) exposure: f64,
     /// Output image: .png (8-bit sRGB) or .exr (linear float).
     #[arg(short = 'o', long = "output", value_name = "OUT")]
-    output: Option<PathBuf>,
+    pub(crate) output: Option<PathBuf>,
     /// Machine-readable report on stdout.
     #[arg(long)]
-    json: bool,
+    pub(crate) json: bool,
     /// Instead of one image: the speed-for-accuracy curve at these wavelength counts.
     #[arg(long, value_name = "N,N,...", value_delimiter = ',')]
-    sweep: Option<Vec<usize>>,
+    pub(crate) sweep: Option<Vec<usize>>,
     /// Folder for the sweep's sweep.md, sweep.json and sweep.png.
     #[arg(long, value_name = "DIR", requires = "sweep")]
-    sweep_out: Option<PathBuf>,
+    pub(crate) sweep_out: Option<PathBuf>,
     /// Frames per wavelength count in the sweep (the fastest is kept).
     #[arg(long, value_name = "N", default_value_t = 3)]
-    repeats: usize,
+    pub(crate) repeats: usize,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-enum BackgroundArg {
+pub(crate) enum BackgroundArg {
     Env,
     Flat,
     None,
 }
 
-#[derive(Debug, Clone, Copy, ValueEnum)]
-enum SceneArg {
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub(crate) enum SceneArg {
     /// Fig. 6: chrome-oxide film 270 nm (n 2.7) on black plastic (1.45)
     Ball,
     /// Fig. 7: TiO2 (2.3) on clear plastic (1.45), 150 nm and 350 nm
@@ -231,6 +239,109 @@ fn diffuse(spec: &str) -> anyhow::Result<Tabulated> {
     Ok(specmap::data::spectrum(spec)?.data)
 }
 
+/// `RenderArgs` parsed alone (for [`RenderArgs::parse_pairs`]).
+#[derive(Debug, clap::Parser)]
+#[command(name = "specmap render")]
+struct RenderOnly {
+    #[command(flatten)]
+    args: RenderArgs,
+}
+
+impl RenderArgs {
+    /// The options as `specmap render` spells them, `(long name, value)`, each one set away
+    /// from its default (a flag's value is empty), in the order `--help` lists them.
+    pub(crate) fn to_pairs(&self) -> Vec<(&'static str, String)> {
+        fn name<T: ValueEnum>(v: &T) -> String {
+            v.to_possible_value()
+                .map_or(String::new(), |p| p.get_name().to_string())
+        }
+        let mut out: Vec<(&'static str, String)> = Vec::new();
+        let mut opt = |k: &'static str, v: Option<String>| {
+            if let Some(v) = v {
+                out.push((k, v));
+            }
+        };
+        let path = |p: &Option<PathBuf>| p.as_ref().map(|p| p.display().to_string());
+        let num = |v: Option<f64>| v.map(|v| v.to_string());
+        opt(
+            "scene",
+            (self.scene != SceneArg::Ball).then(|| name(&self.scene)),
+        );
+        opt("env", path(&self.env));
+        opt(
+            "background",
+            (self.background != BackgroundArg::Env).then(|| name(&self.background)),
+        );
+        opt("light", (self.light != "D65").then(|| self.light.clone()));
+        opt("film", self.film.clone());
+        opt("substrate", self.substrate.clone());
+        opt("diffuse", self.diffuse.clone());
+        opt("kd", num(self.kd));
+        opt("ks", num(self.ks));
+        opt("shininess", num(self.shininess));
+        opt("size", self.size.clone());
+        opt("step", num(self.step));
+        opt("samples", self.samples.map(|v| v.to_string()));
+        opt("tolerance", num(self.tolerance));
+        opt("max-nodes", self.max_nodes.map(|v| v.to_string()));
+        opt("quadrature", self.quadrature.map(|q| name(&q)));
+        opt(
+            "rule",
+            (self.rule != RuleArg::Riemann).then(|| name(&self.rule)),
+        );
+        opt(
+            "observer",
+            (self.observer != ObserverArg::Cie1931).then(|| name(&self.observer)),
+        );
+        opt(
+            "backend",
+            (self.backend != BackendArg::Auto).then(|| name(&self.backend)),
+        );
+        opt("orbit", self.orbit.clone());
+        opt("zoom", num(self.zoom));
+        opt(
+            "exposure",
+            (self.exposure != 0.0).then(|| self.exposure.to_string()),
+        );
+        opt("output", path(&self.output));
+        out
+    }
+
+    /// The options `pairs` give (as [`RenderArgs::to_pairs`] writes them), parsed and checked
+    /// as `specmap render` parses its command line.
+    pub(crate) fn parse_pairs<'a>(
+        pairs: impl IntoIterator<Item = (&'a str, &'a str)>,
+    ) -> anyhow::Result<RenderArgs> {
+        let mut argv = vec!["specmap render".to_string()];
+        for (k, v) in pairs {
+            argv.push(format!("--{k}={v}"));
+        }
+        let r = <RenderOnly as clap::Parser>::try_parse_from(&argv).map_err(|e| {
+            let text = e.to_string();
+            anyhow::anyhow!(
+                "{}",
+                text.lines()
+                    .next()
+                    .unwrap_or("invalid option")
+                    .trim_start_matches("error: ")
+            )
+        })?;
+        Ok(r.args)
+    }
+
+    pub(crate) fn preset(&self) -> Preset {
+        Preset::from(self.scene)
+    }
+
+    /// The image size: `--size` or the preset's.
+    pub(crate) fn image_size(&self) -> anyhow::Result<(usize, usize)> {
+        match &self.size {
+            Some(s) => size(s),
+            None => Ok(self.preset().default_size()),
+        }
+    }
+}
+
 pub fn run(a: RenderArgs) -> anyhow::Result<()> {
     if !(a.exposure.is_finite() && a.exposure.abs() <= 64.0) {
         anyhow::bail!(
@@ -274,68 +385,9 @@ pub fn run(a: RenderArgs) -> anyhow::Result<()> {
         }
     }
     guard.check()?;
-    let (lighting, env_report) = match &a.env {
-        Some(p) => {
-            let (l, r) = env::load(p, &a.light)
-                .with_context(|| format!("loading the environment {}", p.display()))?;
-            (Some(l), Some(r))
-        }
-        None => (None, None),
-    };
-    let mut scene = preset.scene(w, h, &a.light, lighting)?;
-    scene.backdrop = match a.background {
-        BackgroundArg::Env => specmap::render::Backdrop::DEFAULT,
-        BackgroundArg::Flat => specmap::render::Backdrop::Flat,
-        BackgroundArg::None => specmap::render::Backdrop::Hidden,
-    };
-    // Surface flags on the main objects.
-    let layers = a.film.as_deref().map(film_layers).transpose()?;
-    let substrate = a
-        .substrate
-        .as_deref()
-        .map(|s| index(s, "substrate"))
-        .transpose()?;
-    let rd = a.diffuse.as_deref().map(diffuse).transpose()?;
-    for o in scene.objects.iter_mut().filter(|o| o.main) {
-        let s = &mut o.surface;
-        if layers.is_some() || substrate.is_some() {
-            let f = s.film.get_or_insert(Film {
-                ambient: Material::constant(Index::real(1.0)?),
-                layers: Vec::new(),
-                substrate: Material::constant(Index::real(1.5)?),
-            });
-            if let Some(l) = &layers {
-                f.layers = l.clone();
-                o.ramp = None;
-            }
-            if let Some(m) = &substrate {
-                f.substrate = m.clone();
-            }
-        }
-        if let Some(r) = &rd {
-            s.diffuse = Some(r.clone());
-        }
-        if let Some(v) = a.kd {
-            s.kd = v;
-        }
-        if let Some(v) = a.ks {
-            s.ks = v;
-        }
-        if let Some(v) = a.shininess {
-            s.shininess = v;
-        }
-    }
-    let base = match (a.step, a.samples) {
-        (Some(s), _) => Spectral::step(s)?,
-        (None, Some(n)) => Spectral::samples(n)?,
-        (None, None) => Spectral::default(),
-    };
-    let spectral = Spectral {
-        rule: a.rule.into(),
-        observer: a.observer.into(),
-        space: RgbSpace::SRGB,
-        ..base
-    };
+    let (lighting, env_report) = load_env(&a)?.unzip();
+    let scene = scene_from(&a, preset, (w, h), lighting)?;
+    let spectral = spectral_of(&a)?;
     let aim = a.tolerance.map(|t| (t, a.max_nodes));
     let (quadrature, selection) = quadrature_for(&scene, &spectral, a.quadrature, aim)?;
     // The backend.
@@ -501,6 +553,119 @@ pub fn run(a: RenderArgs) -> anyhow::Result<()> {
     outln!(out, "wrote {}", output.display());
     super::emit(&out);
     Ok(())
+}
+
+/// The environment of `--env` as a lighting, and what loading found.
+pub(crate) fn load_env(
+    a: &RenderArgs,
+) -> anyhow::Result<Option<(specmap::render::Lighting, env::EnvReport)>> {
+    a.env
+        .as_ref()
+        .map(|p| {
+            env::load(p, &a.light)
+                .with_context(|| format!("loading the environment {}", p.display()))
+        })
+        .transpose()
+}
+
+/// The scene `a` describes: the preset at `size`, lit by `lighting` (the loaded `--env`) or
+/// the uniform `--light`, with the surface flags on its main objects, the background, the
+/// zoom and the orbit.
+pub(crate) fn scene_from(
+    a: &RenderArgs,
+    preset: Preset,
+    (w, h): (usize, usize),
+    lighting: Option<specmap::render::Lighting>,
+) -> anyhow::Result<Scene> {
+    let mut scene = preset.scene(w, h, &a.light, lighting)?;
+    scene.backdrop = match a.background {
+        BackgroundArg::Env => specmap::render::Backdrop::DEFAULT,
+        BackgroundArg::Flat => specmap::render::Backdrop::Flat,
+        BackgroundArg::None => specmap::render::Backdrop::Hidden,
+    };
+    surfaces(a, &mut scene)?;
+    if let Some(z) = a.zoom {
+        if !(z.is_finite() && (0.01..=100.0).contains(&z)) {
+            anyhow::bail!("--zoom {z}: must be between 0.01 and 100");
+        }
+        scene.view.half_height /= z;
+    }
+    if let Some(o) = &a.orbit {
+        scene.orbit(orbit(o)?);
+    }
+    Ok(scene)
+}
+
+/// `--orbit YAW,PITCH`.
+pub(crate) fn orbit(spec: &str) -> anyhow::Result<specmap::render::Orbit> {
+    let bad = || anyhow::anyhow!("--orbit '{spec}' must be YAW,PITCH in degrees, e.g. 30,-10");
+    let (y, p) = spec.split_once(',').ok_or_else(bad)?;
+    let yaw: f64 = y.trim().parse().map_err(|_| bad())?;
+    let pitch: f64 = p.trim().parse().map_err(|_| bad())?;
+    if !(yaw.is_finite() && pitch.is_finite() && pitch.abs() <= 90.0) {
+        anyhow::bail!("--orbit '{spec}': the pitch must be between -90 and 90 degrees");
+    }
+    Ok(specmap::render::Orbit {
+        yaw_deg: yaw,
+        pitch_deg: pitch,
+    })
+}
+
+/// `--film`, `--substrate`, `--diffuse`, `--kd`, `--ks` and `--shininess` on the scene's main
+/// objects.
+fn surfaces(a: &RenderArgs, scene: &mut Scene) -> anyhow::Result<()> {
+    let layers = a.film.as_deref().map(film_layers).transpose()?;
+    let substrate = a
+        .substrate
+        .as_deref()
+        .map(|s| index(s, "substrate"))
+        .transpose()?;
+    let rd = a.diffuse.as_deref().map(diffuse).transpose()?;
+    for o in scene.objects.iter_mut().filter(|o| o.main) {
+        let s = &mut o.surface;
+        if layers.is_some() || substrate.is_some() {
+            let f = s.film.get_or_insert(Film {
+                ambient: Material::constant(Index::real(1.0)?),
+                layers: Vec::new(),
+                substrate: Material::constant(Index::real(1.5)?),
+            });
+            if let Some(l) = &layers {
+                f.layers = l.clone();
+                o.ramp = None;
+            }
+            if let Some(m) = &substrate {
+                f.substrate = m.clone();
+            }
+        }
+        if let Some(r) = &rd {
+            s.diffuse = Some(r.clone());
+        }
+        if let Some(v) = a.kd {
+            s.kd = v;
+        }
+        if let Some(v) = a.ks {
+            s.ks = v;
+        }
+        if let Some(v) = a.shininess {
+            s.shininess = v;
+        }
+    }
+    Ok(())
+}
+
+/// The grid, rule, observer and space of `--step`/`--samples`, `--rule` and `--observer`.
+pub(crate) fn spectral_of(a: &RenderArgs) -> anyhow::Result<Spectral> {
+    let base = match (a.step, a.samples) {
+        (Some(s), _) => Spectral::step(s)?,
+        (None, Some(n)) => Spectral::samples(n)?,
+        (None, None) => Spectral::default(),
+    };
+    Ok(Spectral {
+        rule: a.rule.into(),
+        observer: a.observer.into(),
+        space: RgbSpace::SRGB,
+        ..base
+    })
 }
 
 /// The quadrature of `--quadrature`, `--tolerance` (and `--max-nodes`), `--step`/`--samples`

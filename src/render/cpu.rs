@@ -160,6 +160,9 @@ fn sample_terms(p: &Prepared, map: u32, dir: [f64; 3], lookup: &mut Vec<f64>, ou
     let [off, w, h, groups] = p.maps[map as usize];
     let off = off as usize;
     let (w, h, g) = (w as usize, h as usize, groups as usize);
+    let o = &p.params.orientation;
+    let dir = [0, 1, 2]
+        .map(|r| o[r][0] as f64 * dir[0] + o[r][1] as f64 * dir[1] + o[r][2] as f64 * dir[2]);
     env::sample_into(&p.texels[off..off + w * h * g], w, h, g, dir, lookup);
     out.clear();
     out.extend(
@@ -233,6 +236,89 @@ fn pixel(
     scratch: &mut Scratch,
 ) -> [f32; 3] {
     let n_wl = p.params.n_wl as usize;
+    let mut xyz = [0.0f64; 3];
+    let cmf = p.params.cmf_offset as usize;
+    radiance(p, constant, x, y, scratch, |i, l| {
+        for (c, v) in xyz.iter_mut().enumerate() {
+            *v += p.spectra[cmf + c * n_wl + i] as f64 * l;
+        }
+    });
+    let rgb = p.params.rgb;
+    let row = |r: usize| {
+        (rgb[r][0] as f64 * xyz[0] + rgb[r][1] as f64 * xyz[1] + rgb[r][2] as f64 * xyz[2]) as f32
+    };
+    [row(0), row(1), row(2)]
+}
+
+/// What one pixel shows, wavelength by wavelength: [`pixel_spectrum`].
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct PixelSpectrum {
+    /// The quadrature's nodes.
+    pub wavelengths_nm: Vec<f64>,
+    /// The radiance reaching the camera at each node.
+    pub radiance: Vec<f64>,
+    /// The object hit (its index in the scene), if any.
+    pub object: Option<usize>,
+    /// The angle between the view and the surface normal, where an object is hit.
+    pub view_angle_deg: Option<f64>,
+    /// The film's reflectance at that angle (unpolarised, its thickness at that point), where
+    /// the object has a film.
+    pub film_reflectance: Option<Vec<f64>>,
+}
+
+/// Pixel (x, y)'s spectral radiance at the prepared quadrature's nodes: the terms [`render`]
+/// weights by the colour-matching functions, and the film's reflectance there.
+pub fn pixel_spectrum(p: &Prepared, x: usize, y: usize) -> PixelSpectrum {
+    let n_wl = p.params.n_wl as usize;
+    let mut radiance_nm = vec![0.0; n_wl];
+    radiance(
+        p,
+        &constant_maps(p),
+        x,
+        y,
+        &mut Scratch::default(),
+        |i, l| radiance_nm[i] += l,
+    );
+    let hit = hit_pixel(p, x, y);
+    let film = hit.and_then(|(oi, n)| {
+        let o = &p.objects[oi];
+        let f = p.films[o.material as usize].as_ref()?;
+        let cos_v = n[2].clamp(0.0, 1.0);
+        let scale = ramp_scale(o, pixel_position(p, x, y)[0]);
+        Some((0..n_wl).map(|i| film_rt(f, i, cos_v, scale).0).collect())
+    });
+    PixelSpectrum {
+        wavelengths_nm: p.wavelengths_nm.clone(),
+        radiance: radiance_nm,
+        object: hit.map(|(oi, _)| oi),
+        view_angle_deg: hit.map(|(_, n)| n[2].clamp(-1.0, 1.0).acos().to_degrees()),
+        film_reflectance: film,
+    }
+}
+
+/// The film's thickness scale at world x on object `o`'s ramp (None without one).
+fn ramp_scale(o: &GpuObject, px: f64) -> Option<f64> {
+    (o.flags[0] != 0).then(|| {
+        let r = o.ramp.map(|v| v as f64);
+        let t = if r[1] == r[0] {
+            0.0
+        } else {
+            ((px - r[0]) / (r[1] - r[0])).clamp(0.0, 1.0)
+        };
+        r[2] + (r[3] - r[2]) * t
+    })
+}
+
+/// The radiance of pixel (x, y) at each node `i`, handed to `add(i, radiance)`.
+fn radiance(
+    p: &Prepared,
+    constant: &[Option<Terms>],
+    x: usize,
+    y: usize,
+    scratch: &mut Scratch,
+    mut add: impl FnMut(usize, f64),
+) {
+    let n_wl = p.params.n_wl as usize;
     let sp = |off: u32, i: usize| p.spectra[off as usize + i] as f64;
     let expand = |c: &[(usize, f64)], off: u32, i: usize| -> f64 {
         c.iter().map(|&(j, c)| c * sp(off, j * n_wl + i)).sum()
@@ -244,13 +330,6 @@ fn pixel(
         lookup,
     } = scratch;
     let d = || background_direction(p, x, y);
-    let mut xyz = [0.0f64; 3];
-    let cmf = p.params.cmf_offset as usize;
-    let mut add = |i: usize, l: f64| {
-        for (c, v) in xyz.iter_mut().enumerate() {
-            *v += p.spectra[cmf + c * n_wl + i] as f64 * l;
-        }
-    };
     let [px, py] = pixel_position(p, x, y);
     match hit(&p.objects, candidates(p, x, y), px, py) {
         None if p.params.flags & HIDE_BACKGROUND != 0 => {}
@@ -305,15 +384,7 @@ fn pixel(
             } else {
                 (0.0, 0.0)
             };
-            let scale = (o.flags[0] != 0).then(|| {
-                let r = o.ramp.map(|v| v as f64);
-                let t = if r[1] == r[0] {
-                    0.0
-                } else {
-                    ((px - r[0]) / (r[1] - r[0])).clamp(0.0, 1.0)
-                };
-                r[2] + (r[3] - r[2]) * t
-            });
+            let scale = ramp_scale(o, px);
             let sun_spd = lt.layout[1];
             for i in 0..n_wl {
                 let e = sp(sun_spd, i);
@@ -337,9 +408,4 @@ fn pixel(
             }
         }
     }
-    let rgb = p.params.rgb;
-    let row = |r: usize| {
-        (rgb[r][0] as f64 * xyz[0] + rgb[r][1] as f64 * xyz[1] + rgb[r][2] as f64 * xyz[2]) as f32
-    };
-    [row(0), row(1), row(2)]
 }

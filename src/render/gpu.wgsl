@@ -19,6 +19,10 @@ struct Params {
     rgb0: vec4<f32>,
     rgb1: vec4<f32>,
     rgb2: vec4<f32>,
+    // Camera to world for map lookups (Scene::orientation), rows.
+    rot0: vec4<f32>,
+    rot1: vec4<f32>,
+    rot2: vec4<f32>,
 }
 
 struct Object {
@@ -96,8 +100,9 @@ fn taps(map: u32, dir: vec3<f32>) -> Taps {
         t.wt = vec4<f32>(1.0, 0.0, 0.0, 0.0);
         return t;
     }
-    let u = 0.5 - atan2(dir.x, dir.z) / TWO_PI;
-    let v = acos(clamp(dir.y, -1.0, 1.0)) / PI;
+    let wd = vec3<f32>(dot(params.rot0.xyz, dir), dot(params.rot1.xyz, dir), dot(params.rot2.xyz, dir));
+    let u = 0.5 - atan2(wd.x, wd.z) / TWO_PI;
+    let v = acos(clamp(wd.y, -1.0, 1.0)) / PI;
     let fx = u * f32(w) - 0.5;
     let fy = clamp(v * f32(h) - 0.5, 0.0, f32(h - 1u));
     let x0f = floor(fx);

@@ -259,6 +259,50 @@ pub struct Scene {
     pub background: usize,
     /// How the background is seen.
     pub backdrop: Backdrop,
+    /// Camera to world for the lightings' maps: a map is looked up in direction
+    /// `orientation · d` for a direction `d` of the camera's frame ([`Scene::orbit`]; the
+    /// identity by default).
+    pub orientation: [[f64; 3]; 3],
+    /// Whether a choice of quadrature ([`Scene::choose_quadrature`]) must hold for every
+    /// orientation, not only this one: every texel of a seen map counts as shown and the sun
+    /// as facing the camera (its brightest). A viewer that orbits without refitting sets it.
+    pub any_orientation: bool,
+}
+
+/// The identity rotation, [`Scene::orientation`]'s default.
+pub const IDENTITY: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+
+/// The camera's orbit, in degrees: `yaw` about the world's vertical (Y), then `pitch` about the
+/// camera's horizontal (X). The camera then looks along
+/// `(-sin yaw cos pitch, sin pitch, -cos yaw cos pitch)` in the world (down −Z at 0, 0).
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
+pub struct Orbit {
+    pub yaw_deg: f64,
+    pub pitch_deg: f64,
+}
+
+impl Orbit {
+    /// Camera to world: `R_y(yaw) · R_x(pitch)`.
+    pub fn rotation(&self) -> [[f64; 3]; 3] {
+        let (sy, cy) = self.yaw_deg.to_radians().sin_cos();
+        let (sp, cp) = self.pitch_deg.to_radians().sin_cos();
+        // R_y = [[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]], R_x = [[1, 0, 0], [0, cp, -sp], [0, sp, cp]].
+        [
+            [cy, sy * sp, sy * cp],
+            [0.0, cp, -sp],
+            [-sy, cy * sp, cy * cp],
+        ]
+    }
+}
+
+/// `m · v`.
+pub fn rotate(m: &[[f64; 3]; 3], v: [f64; 3]) -> [f64; 3] {
+    [0, 1, 2].map(|r| m[r][0] * v[0] + m[r][1] * v[1] + m[r][2] * v[2])
+}
+
+/// `mᵀ · v` (the inverse of a rotation).
+pub fn rotate_back(m: &[[f64; 3]; 3], v: [f64; 3]) -> [f64; 3] {
+    [0, 1, 2].map(|c| m[0][c] * v[0] + m[1][c] * v[1] + m[2][c] * v[2])
 }
 
 /// What a ray that misses every object sees.
@@ -340,6 +384,20 @@ impl std::fmt::Display for Backend {
 }
 
 impl Scene {
+    /// The camera orbits the scene as a turntable would show it: the objects turn with the
+    /// camera, the lightings (maps and suns) stay with the world. Sets [`Scene::orientation`]
+    /// and turns each sun into the camera's frame; for a sphere this is exactly the camera
+    /// orbiting. Applied to a scene as built (its orientation the identity).
+    pub fn orbit(&mut self, orbit: Orbit) {
+        let r = orbit.rotation();
+        self.orientation = r;
+        for l in &mut self.lightings {
+            if let Some(s) = &mut l.sun {
+                s.direction = rotate_back(&r, s.direction);
+            }
+        }
+    }
+
     /// Checks the scene's consistency (indices, sizes, films) before any work is done.
     pub fn validate(&self) -> Result<()> {
         if self.width == 0 || self.height == 0 {

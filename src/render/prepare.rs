@@ -45,6 +45,8 @@ pub struct Params {
     pub view: [f32; 4],
     /// XYZ (Y = 1) -> linear RGB, rows (w unused).
     pub rgb: [[f32; 4]; 3],
+    /// Camera to world for map lookups ([`Scene::orientation`]), rows (w unused).
+    pub orientation: [[f32; 4]; 3],
 }
 
 #[repr(C)]
@@ -457,6 +459,9 @@ impl Prepared {
                 pinhole_tangent(scene.backdrop),
             ],
             rgb: [row(0), row(1), row(2)],
+            orientation: scene
+                .orientation
+                .map(|r| [r[0] as f32, r[1] as f32, r[2] as f32, 0.0]),
         };
         let rows = super::rows::index(&objects, &params);
         Ok(Prepared {

@@ -214,6 +214,8 @@ impl Preset {
             objects,
             background: 0,
             backdrop: super::Backdrop::DEFAULT,
+            orientation: super::IDENTITY,
+            any_orientation: false,
         })
     }
 }

@@ -362,9 +362,14 @@ fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
 }
 
 impl Brightness {
-    fn of(l: &Lighting) -> Brightness {
+    /// `any_orientation`: the sun as it would face the camera ([`super::Scene::any_orientation`]).
+    fn of(l: &Lighting, any_orientation: bool) -> Brightness {
         let (sun, sun_dir) = l.sun.map_or((0.0, [0.0, 0.0, 1.0]), |s| {
-            let d = s.direction;
+            let d = if any_orientation {
+                [0.0, 0.0, 1.0]
+            } else {
+                s.direction
+            };
             let len = dot(d, d).sqrt();
             if len > 0.0 {
                 (s.irradiance.abs(), d.map(|v| v / len))
@@ -530,7 +535,7 @@ impl Scene {
             held_out: Vec::new(),
         };
         for (li, lighting) in self.lightings.iter().enumerate() {
-            let b = Brightness::of(lighting);
+            let b = Brightness::of(lighting, self.any_orientation);
             let objects = self.distinct_objects(li);
             let shininess = shininess_of(&objects);
             let added: Vec<&[f64]> = texels

@@ -27,6 +27,10 @@ impl Scene {
         };
         let seen = &maps.seen;
         let mut shown = vec![false; seen.width * seen.height];
+        if self.any_orientation {
+            // Every orientation: the camera may look anywhere.
+            return Some(seen.clone());
+        }
         let behind = li == self.background && self.backdrop != Backdrop::Hidden;
         let through = self
             .objects
@@ -37,6 +41,7 @@ impl Scene {
             for y in 0..self.height {
                 for x in 0..self.width {
                     let d = pinhole_direction(t, self.width, self.height, x, y);
+                    let d = crate::render::rotate(&self.orientation, d);
                     for (i, w) in bilinear(seen.width, seen.height, d) {
                         if w > 0.0 {
                             shown[i] = true;

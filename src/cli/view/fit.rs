@@ -1,0 +1,308 @@
+//! The view's wavelengths: the quadrature the settings ask for, and the fit behind a fitted
+//! one. A fit runs on its own thread while frames keep coming on an interim uniform grid; it
+//! is made to cover what the view changes without refitting: every orientation of the camera
+//! (zoom, orbit, exposure and size never refit) and, for a film, its thickness scaled over
+//! the paper's 100-400 nm sweep. A change outside that schedules a refit, and says why.
+
+use crate::cli::render::{tolerance_options, QuadratureArg, RenderArgs};
+use specmap::quadrature::choose::{Family, Selection};
+use specmap::quadrature::Quadrature;
+use specmap::render::{Film, Ramp, Scene};
+use std::sync::mpsc::{channel, Receiver};
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+
+/// Options that never change what a fit covers.
+pub(crate) const VIEW_ONLY: [&str; 6] = ["exposure", "orbit", "zoom", "size", "backend", "film"];
+
+/// The thicknesses a fitted film covers: the paper's sweep, and the film's own.
+const SWEEP_NM: (f64, f64) = (100.0, 400.0);
+
+/// What a fitted quadrature was made for.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Covers {
+    /// The settings but [`VIEW_ONLY`]'s.
+    pub key: Vec<(String, String)>,
+    /// The main objects' films as fitted, and the thickness scales covered.
+    pub films: Vec<Option<Film>>,
+    pub scales: (f64, f64),
+}
+
+impl Covers {
+    /// Why `other` (the settings now) is not covered, or None when it is.
+    pub(crate) fn misses(&self, other: &Covers) -> Option<String> {
+        if self.key != other.key {
+            let changed: Vec<String> = other
+                .key
+                .iter()
+                .filter(|p| !self.key.contains(p))
+                .chain(self.key.iter().filter(|p| !other.key.contains(p)))
+                .map(|(k, _)| format!("--{k}"))
+                .collect();
+            let mut changed = changed;
+            changed.dedup();
+            return Some(format!("{} changed", changed.join(", ")));
+        }
+        for (a, b) in self.films.iter().zip(&other.films) {
+            match (a, b) {
+                (None, None) => {}
+                (Some(a), Some(b)) => match scale_between(a, b) {
+                    Some(k) if k >= self.scales.0 - 1e-9 && k <= self.scales.1 + 1e-9 => {}
+                    Some(_) => return Some("the film's thickness left the fitted range".into()),
+                    None => return Some("the film's layers changed".into()),
+                },
+                _ => return Some("a film was added or removed".into()),
+            }
+        }
+        None
+    }
+}
+
+/// `k` with `b`'s layers `k` times `a`'s (same media), if there is one.
+fn scale_between(a: &Film, b: &Film) -> Option<f64> {
+    if a.ambient != b.ambient || a.substrate != b.substrate || a.layers.len() != b.layers.len() {
+        return None;
+    }
+    let mut k: Option<f64> = None;
+    for (la, lb) in a.layers.iter().zip(&b.layers) {
+        if la.material() != lb.material() || la.thickness_nm() <= 0.0 {
+            return None;
+        }
+        let r = lb.thickness_nm() / la.thickness_nm();
+        match k {
+            Some(k0) if (r - k0).abs() > 1e-9 * k0.abs().max(1.0) => return None,
+            _ => k = Some(r),
+        }
+    }
+    Some(k.unwrap_or(1.0))
+}
+
+/// The main objects' films of the scene `args` describe (no map needed).
+pub(crate) fn films(args: &RenderArgs) -> anyhow::Result<Vec<Option<Film>>> {
+    let scene = crate::cli::render::scene_from(args, args.preset(), (8, 8), None)?;
+    Ok(main_films(&scene))
+}
+
+fn main_films(scene: &Scene) -> Vec<Option<Film>> {
+    scene
+        .objects
+        .iter()
+        .filter(|o| o.main)
+        .map(|o| {
+            if o.ramp.is_some() {
+                None
+            } else {
+                o.surface.film.clone()
+            }
+        })
+        .collect()
+}
+
+/// The scales of the thinnest layer that take it over [`SWEEP_NM`], and 1.
+fn sweep_scales(films: &[Option<Film>]) -> (f64, f64) {
+    let d = films
+        .iter()
+        .flatten()
+        .flat_map(|f| f.layers.iter().map(|l| l.thickness_nm()))
+        .filter(|d| *d > 0.0)
+        .fold(f64::INFINITY, f64::min);
+    if !d.is_finite() {
+        return (1.0, 1.0);
+    }
+    ((SWEEP_NM.0 / d).min(1.0), (SWEEP_NM.1 / d).max(1.0))
+}
+
+/// How the settings choose wavelengths.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) enum Mode {
+    Uniform(Quadrature),
+    Meyer(Quadrature),
+    /// A fit at a tolerance (and a budget of nodes), of the scene's or the uniform family.
+    Fitted {
+        tolerance: f64,
+        budget: Option<usize>,
+        family: Family,
+    },
+}
+
+pub(crate) fn mode(args: &RenderArgs) -> anyhow::Result<Mode> {
+    let spectral = crate::cli::render::spectral_of(args)?;
+    Ok(match (args.tolerance, args.quadrature) {
+        (None, Some(QuadratureArg::Meyer)) => Mode::Meyer(Quadrature::meyer(spectral.observer)?),
+        (None, Some(QuadratureArg::Scene)) => anyhow::bail!(
+            "--quadrature scene fits the wavelengths to a colour tolerance: give --tolerance"
+        ),
+        (None, _) => Mode::Uniform(Quadrature::uniform(
+            spectral.grid,
+            spectral.rule,
+            spectral.observer,
+        )?),
+        (Some(t), kind) => {
+            tolerance_options(t, args.max_nodes, kind)?;
+            Mode::Fitted {
+                tolerance: t,
+                budget: args.max_nodes,
+                family: match kind {
+                    Some(QuadratureArg::Uniform) => Family::Uniform,
+                    Some(QuadratureArg::Meyer) => anyhow::bail!(
+                        "--quadrature meyer has four fixed wavelengths: it cannot follow --tolerance"
+                    ),
+                    _ => Family::Scene,
+                },
+            }
+        }
+    })
+}
+
+/// A fit on its own thread.
+pub(crate) struct Running {
+    pub covers: Covers,
+    pub stage: Arc<Mutex<String>>,
+    pub started: Instant,
+    pub result: Receiver<anyhow::Result<Selection>>,
+}
+
+/// Starts the fit for `args` (whose mode is [`Mode::Fitted`]); `wake` is called when it ends.
+pub(crate) fn start(
+    args: &RenderArgs,
+    covers: Covers,
+    wake: impl Fn() + Send + 'static,
+) -> anyhow::Result<Running> {
+    let Mode::Fitted {
+        tolerance,
+        budget,
+        family,
+    } = mode(args)?
+    else {
+        anyhow::bail!("the settings do not ask for a fit");
+    };
+    let opts = tolerance_options(tolerance, budget, args.quadrature)?;
+    let spectral = crate::cli::render::spectral_of(args)?;
+    let stage = Arc::new(Mutex::new("starting".to_string()));
+    let (tx, rx) = channel();
+    let args = args.clone();
+    let scales = covers.scales;
+    let st = stage.clone();
+    std::thread::Builder::new()
+        .name("specmap fit".into())
+        .spawn(move || {
+            let run = || -> anyhow::Result<Selection> {
+                let mut scene =
+                    super::worker::scene(&args, &mut std::collections::HashMap::new())?.0;
+                cover(&mut scene, scales);
+                let report = |s: &specmap::quadrature::progress::Stage| {
+                    if let Ok(mut m) = st.lock() {
+                        *m = s.to_string();
+                    }
+                };
+                Ok(scene.choose_quadrature_reporting(
+                    spectral.observer,
+                    spectral.space,
+                    family,
+                    &opts,
+                    &report,
+                )?)
+            };
+            let _ = tx.send(run());
+            wake();
+        })?;
+    Ok(Running {
+        covers,
+        stage,
+        started: Instant::now(),
+        result: rx,
+    })
+}
+
+/// What the view fits: `scene` for every orientation, each main film without a ramp over
+/// the thickness scales `scales` (the stimuli sample a ramp's whole range).
+fn cover(scene: &mut Scene, scales: (f64, f64)) {
+    scene.any_orientation = true;
+    let half = scene.view.half_height * scene.width as f64 / scene.height as f64;
+    for o in scene.objects.iter_mut().filter(|o| o.main) {
+        if o.surface.film.is_some() && o.ramp.is_none() && scales.0 < scales.1 {
+            o.ramp = Some(Ramp {
+                x0: scene.view.center[0] - half,
+                x1: scene.view.center[0] + half,
+                s0: scales.0,
+                s1: scales.1,
+            });
+        }
+    }
+}
+
+/// What a fit started now for `settings` would cover.
+pub(crate) fn covers(
+    settings: &super::settings::Settings,
+    args: &RenderArgs,
+) -> anyhow::Result<Covers> {
+    let films = films(args)?;
+    let scales = sweep_scales(&films);
+    Ok(Covers {
+        key: settings.without(&VIEW_ONLY),
+        films,
+        scales,
+    })
+}
+
+/// What the settings now are, to hold against a fit's [`Covers`] (the fitted range kept).
+pub(crate) fn now(
+    settings: &super::settings::Settings,
+    args: &RenderArgs,
+) -> anyhow::Result<Covers> {
+    Ok(Covers {
+        key: settings.without(&VIEW_ONLY),
+        films: films(args)?,
+        scales: (1.0, 1.0),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cli::view::settings::Settings;
+
+    fn at(pairs: &[(&str, &str)]) -> (Settings, RenderArgs) {
+        let a = RenderArgs::parse_pairs(pairs.iter().copied()).unwrap();
+        (Settings::from_args(&a), a)
+    }
+
+    #[test]
+    fn camera_and_a_thickness_inside_the_sweep_are_covered_other_changes_are_not() {
+        let (s, a) = at(&[("film", "2.7:270"), ("tolerance", "0.5")]);
+        let fitted = covers(&s, &a).unwrap();
+        assert_eq!(fitted.scales.0, 100.0 / 270.0);
+        assert_eq!(fitted.scales.1, 400.0 / 270.0);
+        let check = |pairs: &[(&str, &str)]| {
+            let (s, a) = at(pairs);
+            fitted.misses(&now(&s, &a).unwrap())
+        };
+        let base = [("tolerance", "0.5")];
+        let with = |extra: &[(&'static str, &'static str)]| {
+            let mut v: Vec<(&str, &str)> = base.to_vec();
+            v.extend_from_slice(extra);
+            v
+        };
+        assert_eq!(
+            check(&with(&[
+                ("film", "2.7:350"),
+                ("orbit", "40,10"),
+                ("zoom", "2")
+            ])),
+            None
+        );
+        assert_eq!(
+            check(&with(&[("film", "2.7:120"), ("exposure", "-1")])),
+            None
+        );
+        assert!(check(&with(&[("film", "2.7:450")]))
+            .unwrap()
+            .contains("range"));
+        assert!(check(&with(&[("film", "2.3:270")]))
+            .unwrap()
+            .contains("layers"));
+        assert!(check(&with(&[("film", "2.7:270"), ("light", "A")]))
+            .unwrap()
+            .contains("--light"));
+    }
+}

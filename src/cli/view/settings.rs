@@ -1,0 +1,149 @@
+//! The view's settings: `specmap render`'s options as its command line spells them. Every
+//! change goes through `render`'s own parser, so the window accepts exactly what `render`
+//! accepts and what it shows is one `specmap render` command away.
+
+use crate::cli::render::RenderArgs;
+
+/// Options that only `render`'s still output or report use: never part of what is shown.
+const STILL_ONLY: [&str; 1] = ["output"];
+
+/// `render`'s options, in `--help`'s order, each set away from its default.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Settings {
+    pairs: Vec<(String, String)>,
+}
+
+impl Settings {
+    pub(crate) fn from_args(a: &RenderArgs) -> Settings {
+        Settings {
+            pairs: a
+                .to_pairs()
+                .into_iter()
+                .filter(|(k, _)| !STILL_ONLY.contains(k))
+                .map(|(k, v)| (k.to_string(), v))
+                .collect(),
+        }
+    }
+
+    pub(crate) fn get(&self, key: &str) -> Option<&str> {
+        self.pairs
+            .iter()
+            .find(|(k, _)| k == key)
+            .map(|(_, v)| v.as_str())
+    }
+
+    /// Sets (or, with None, removes) options at once, checked by `render`'s parser: on an
+    /// error nothing changes. Returns whether anything did.
+    pub(crate) fn set_many(&mut self, changes: &[(&str, Option<String>)]) -> anyhow::Result<bool> {
+        let mut next = self.clone();
+        for (key, value) in changes {
+            let key = key.trim_start_matches('-');
+            if STILL_ONLY.contains(&key) || key == "json" || key.starts_with("sweep") {
+                anyhow::bail!("--{key} does not apply to the view");
+            }
+            match (next.pairs.iter().position(|(k, _)| k == key), value) {
+                (Some(i), Some(v)) => next.pairs[i].1 = v.clone(),
+                (Some(i), None) => {
+                    next.pairs.remove(i);
+                }
+                (None, Some(v)) => next.pairs.push((key.to_string(), v.clone())),
+                (None, None) => {}
+            }
+        }
+        let parsed = next.parse()?;
+        // Back through to_pairs: the canonical order, defaults dropped.
+        let next = Settings::from_args(&parsed);
+        let changed = next != *self;
+        *self = next;
+        Ok(changed)
+    }
+
+    #[cfg(test)]
+    pub(crate) fn set(&mut self, key: &str, value: Option<String>) -> anyhow::Result<bool> {
+        self.set_many(&[(key, value)])
+    }
+
+    /// The options parsed as `render` parses them.
+    pub(crate) fn parse(&self) -> anyhow::Result<RenderArgs> {
+        RenderArgs::parse_pairs(self.pairs.iter().map(|(k, v)| (k.as_str(), v.as_str())))
+    }
+
+    /// The pairs but `skip`'s, for keys of what a result depends on.
+    pub(crate) fn without(&self, skip: &[&str]) -> Vec<(String, String)> {
+        self.pairs
+            .iter()
+            .filter(|(k, _)| !skip.contains(&k.as_str()))
+            .cloned()
+            .collect()
+    }
+
+    /// The `specmap render` command that renders what the view shows, to `output`.
+    pub(crate) fn command(&self, output: &str) -> String {
+        let mut words = vec!["specmap".to_string(), "render".to_string()];
+        for (k, v) in &self.pairs {
+            words.push(format!("--{k}"));
+            words.push(quote(v));
+        }
+        words.push("-o".into());
+        words.push(quote(output));
+        words.join(" ")
+    }
+}
+
+/// `v` as one shell word.
+fn quote(v: &str) -> String {
+    let plain = !v.is_empty()
+        && v.chars()
+            .all(|c| c.is_ascii_alphanumeric() || "-_.,:/+=@%".contains(c));
+    if plain {
+        v.to_string()
+    } else {
+        format!("'{}'", v.replace('\'', r"'\''"))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn settings(argv: &[(&str, &str)]) -> Settings {
+        Settings::from_args(&RenderArgs::parse_pairs(argv.iter().copied()).unwrap())
+    }
+
+    #[test]
+    fn a_change_is_checked_by_renders_parser_and_a_bad_one_changes_nothing() {
+        let mut s = settings(&[("scene", "cylinders"), ("light", "A")]);
+        assert!(s.set("film", Some("2.7:300".into())).unwrap());
+        assert_eq!(s.get("film"), Some("2.7:300"));
+        let before = s.clone();
+        let e = s.set("scene", Some("teapot".into())).unwrap_err();
+        assert!(e.to_string().contains("teapot"), "{e}");
+        assert_eq!(s, before);
+        // Conflicting options are refused as render refuses them.
+        assert!(s
+            .set_many(&[("step", Some("5".into())), ("samples", Some("9".into()))])
+            .is_err());
+        // Back to a default: the option leaves the command.
+        assert!(s.set("light", Some("D65".into())).unwrap());
+        assert_eq!(s.get("light"), None);
+    }
+
+    #[test]
+    fn the_command_parses_back_to_the_same_settings() {
+        let s = settings(&[
+            ("scene", "ball"),
+            ("film", "2.7:250,1.38:100"),
+            ("exposure", "-1.5"),
+            ("orbit", "30,-10"),
+            ("diffuse", "my lamp.csv"),
+        ]);
+        let cmd = s.command("view.png");
+        assert!(
+            cmd.starts_with("specmap render --film 2.7:250,1.38:100"),
+            "{cmd}"
+        );
+        assert!(cmd.contains("--diffuse 'my lamp.csv'"), "{cmd}");
+        assert!(cmd.ends_with("-o view.png"), "{cmd}");
+        assert_eq!(s.parse().unwrap().to_pairs().len(), 5);
+    }
+}

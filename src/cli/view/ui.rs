@@ -1,0 +1,446 @@
+//! The window's widgets: the controls beside the picture (every `render` option), the
+//! picture (drag to orbit, scroll to zoom, click to probe), the status line and the probe.
+
+use super::app::App;
+use eframe::egui;
+use egui::{Color32, Pos2, Stroke, Vec2};
+
+/// Text fields and sliders between edits (applied on Enter or release).
+pub(crate) struct UiState {
+    env: String,
+    light: String,
+    substrate: String,
+    diffuse: String,
+    /// The film's layers: index text and thickness in nm.
+    layers: Vec<(String, f64)>,
+    pub(super) orbit: [f64; 2],
+    samples: usize,
+    tolerance: f64,
+    budget: usize,
+}
+
+impl UiState {
+    pub(crate) fn new(s: &super::settings::Settings) -> UiState {
+        let text = |k: &str| s.get(k).unwrap_or_default().to_string();
+        let args = s.parse().ok();
+        let films = args.as_ref().and_then(|a| super::fit::films(a).ok());
+        let layers = match s.get("film") {
+            Some(f) => f
+                .split(',')
+                .filter_map(|p| p.rsplit_once(':'))
+                .map(|(n, d)| (n.trim().to_string(), d.trim().parse().unwrap_or(0.0)))
+                .collect(),
+            None => films
+                .iter()
+                .flatten()
+                .flatten()
+                .next()
+                .map(|f| {
+                    f.layers
+                        .iter()
+                        .map(|l| {
+                            let n = l.material().index_at(550.0).map_or(1.5, |i| i.n());
+                            (format!("{n}"), l.thickness_nm())
+                        })
+                        .collect()
+                })
+                .unwrap_or_default(),
+        };
+        let orbit = s
+            .get("orbit")
+            .and_then(|o| crate::cli::render::orbit(o).ok())
+            .map_or([0.0, 0.0], |o| [o.yaw_deg, o.pitch_deg]);
+        UiState {
+            env: text("env"),
+            light: s.get("light").unwrap_or("D65").to_string(),
+            substrate: text("substrate"),
+            diffuse: text("diffuse"),
+            layers,
+            orbit,
+            samples: args.as_ref().and_then(|a| a.samples).unwrap_or(81),
+            tolerance: args.as_ref().and_then(|a| a.tolerance).unwrap_or(0.5),
+            budget: args.as_ref().and_then(|a| a.max_nodes).unwrap_or(8),
+        }
+    }
+}
+
+fn film_text(layers: &[(String, f64)]) -> Option<String> {
+    (!layers.is_empty()).then(|| {
+        layers
+            .iter()
+            .map(|(n, d)| format!("{n}:{}", (d * 10.0).round() / 10.0))
+            .collect::<Vec<_>>()
+            .join(",")
+    })
+}
+
+/// A text field applied to option `key` on Enter (empty: the default).
+fn text_option(
+    ui: &mut egui::Ui,
+    app: &mut App,
+    label: &str,
+    key: &str,
+    pick: fn(&mut UiState) -> &mut String,
+) {
+    ui.horizontal(|ui| {
+        ui.label(label);
+        let r = ui.add(egui::TextEdit::singleline(pick(&mut app.ui)).desired_width(150.0));
+        if r.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter)) {
+            let v = pick(&mut app.ui).trim().to_string();
+            app.change(&[(key, (!v.is_empty()).then_some(v))]);
+        }
+    });
+}
+
+fn number(
+    ui: &mut egui::Ui,
+    app: &mut App,
+    key: &str,
+    label: &str,
+    value: f64,
+    range: std::ops::RangeInclusive<f64>,
+    log: bool,
+) {
+    let mut v = value;
+    let r = ui.add(
+        egui::Slider::new(&mut v, range)
+            .text(label)
+            .logarithmic(log),
+    );
+    if r.changed() {
+        app.change(&[(key, Some(format!("{}", (v * 1e4).round() / 1e4)))]);
+    }
+}
+
+fn controls(app: &mut App, ui: &mut egui::Ui) {
+    ui.heading("Scene");
+    let scene = app.settings.get("scene").unwrap_or("ball").to_string();
+    egui::ComboBox::from_id_salt("scene")
+        .selected_text(scene.clone())
+        .show_ui(ui, |ui| {
+            for s in [
+                "ball",
+                "transparent-ball",
+                "cylinders",
+                "chart",
+                "checker-spheres",
+            ] {
+                if ui.selectable_label(scene == s, s).clicked() {
+                    app.change(&[("scene", Some(s.into()))]);
+                }
+            }
+        });
+    text_option(ui, app, "map", "env", |u| &mut u.env);
+    text_option(ui, app, "light", "light", |u| &mut u.light);
+    let bg = app.settings.get("background").unwrap_or("env").to_string();
+    ui.horizontal(|ui| {
+        ui.label("background");
+        for b in ["env", "flat", "none"] {
+            if ui.selectable_label(bg == b, b).clicked() {
+                app.change(&[("background", Some(b.into()))]);
+            }
+        }
+    });
+    ui.separator();
+    ui.heading("Film");
+    let mut layers = app.ui.layers.clone();
+    let mut edited = false;
+    let mut remove = None;
+    for (i, (n, d)) in layers.iter_mut().enumerate() {
+        ui.horizontal(|ui| {
+            ui.label(format!("{}", i + 1));
+            let r = ui.add(egui::TextEdit::singleline(n).desired_width(44.0));
+            edited |= r.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
+            edited |= ui
+                .add(egui::Slider::new(d, 0.0..=1000.0).suffix(" nm"))
+                .changed();
+            if ui.small_button("x").clicked() {
+                remove = Some(i);
+            }
+        });
+    }
+    if let Some(i) = remove {
+        layers.remove(i);
+        edited = true;
+    }
+    ui.horizontal(|ui| {
+        if layers.len() < specmap::render::MAX_LAYERS && ui.button("add layer").clicked() {
+            layers.push(("1.38".into(), 100.0));
+            edited = true;
+        }
+        if let Some((_, d)) = layers.first_mut() {
+            // The paper's sweep: the first layer from 100 to 400 nm.
+            edited |= ui
+                .add(egui::Slider::new(d, 100.0..=400.0).text("sweep"))
+                .changed();
+        }
+    });
+    app.ui.layers = layers.clone();
+    if edited {
+        app.change(&[("film", film_text(&layers))]);
+    }
+    text_option(ui, app, "substrate", "substrate", |u| &mut u.substrate);
+    text_option(ui, app, "pigment", "diffuse", |u| &mut u.diffuse);
+    let a = &app.args;
+    let (kd, ks, sh) = (a.kd, a.ks, a.shininess);
+    number(ui, app, "kd", "k_d", kd.unwrap_or(1.0), 0.0..=1.0, false);
+    number(ui, app, "ks", "k_s", ks.unwrap_or(0.0), 0.0..=1.0, false);
+    number(
+        ui,
+        app,
+        "shininess",
+        "shininess",
+        sh.unwrap_or(100.0),
+        1.0..=10000.0,
+        true,
+    );
+    ui.separator();
+    ui.heading("Camera");
+    let [mut yaw, mut pitch] = app.ui.orbit;
+    let c1 = ui
+        .add(egui::Slider::new(&mut yaw, -180.0..=180.0).text("yaw"))
+        .changed();
+    let c2 = ui
+        .add(egui::Slider::new(&mut pitch, -90.0..=90.0).text("pitch"))
+        .changed();
+    if c1 || c2 {
+        app.change(&[("orbit", Some(format!("{:.1},{:.1}", yaw, pitch)))]);
+    }
+    let zoom = app.args.zoom.unwrap_or(1.0);
+    number(ui, app, "zoom", "zoom", zoom, 0.25..=8.0, true);
+    let ev = app.args.exposure;
+    let mut e = ev;
+    if ui
+        .add(egui::Slider::new(&mut e, -8.0..=8.0).text("exposure EV"))
+        .changed()
+    {
+        app.change(&[("exposure", Some(format!("{:.2}", e)))]);
+    }
+    ui.separator();
+    wavelengths(app, ui);
+    ui.separator();
+    ui.horizontal(|ui| {
+        if ui.button("command (C)").clicked() {
+            app.print_command();
+        }
+        if ui.button("PNG").clicked() {
+            app.screenshot(std::path::Path::new("view.png"));
+        }
+        if ui.button("EXR").clicked() {
+            app.screenshot(std::path::Path::new("view.exr"));
+        }
+        if ui.button("window").clicked() {
+            app.screenshot_window(ui.ctx(), "view-window.png".into());
+        }
+    });
+    if let Some(c) = app.report.commands.last() {
+        ui.add(egui::Label::new(egui::RichText::new(c).monospace().small()).wrap());
+    }
+}
+
+fn wavelengths(app: &mut App, ui: &mut egui::Ui) {
+    ui.heading("Wavelengths");
+    let a = &app.args;
+    let mode = match (a.tolerance, a.max_nodes, a.quadrature) {
+        (Some(_), Some(_), _) => "budget",
+        (Some(_), None, _) => "fitted",
+        (None, _, Some(crate::cli::render::QuadratureArg::Meyer)) => "meyer",
+        _ => "uniform",
+    };
+    let clear = ["tolerance", "max-nodes", "quadrature", "step", "samples"];
+    let set = |app: &mut App, extra: Vec<(&'static str, String)>| {
+        let mut c: Vec<(&str, Option<String>)> = clear.iter().map(|k| (*k, None)).collect();
+        c.extend(extra.into_iter().map(|(k, v)| (k, Some(v))));
+        app.change(&c);
+    };
+    ui.horizontal(|ui| {
+        for m in ["uniform", "meyer", "fitted", "budget"] {
+            if ui.selectable_label(mode == m, m).clicked() && mode != m {
+                let u = &app.ui;
+                let extra = match m {
+                    "uniform" => vec![("samples", u.samples.to_string())],
+                    "meyer" => vec![("quadrature", "meyer".to_string())],
+                    "fitted" => vec![("tolerance", u.tolerance.to_string())],
+                    _ => vec![
+                        ("tolerance", u.tolerance.to_string()),
+                        ("max-nodes", u.budget.to_string()),
+                    ],
+                };
+                set(app, extra);
+            }
+        }
+    });
+    let u = &mut app.ui;
+    let (mut n, mut t, mut b) = (u.samples, u.tolerance, u.budget);
+    match mode {
+        "uniform" => {
+            let r = ui.add(
+                egui::Slider::new(&mut n, 2..=401)
+                    .text("N")
+                    .logarithmic(true),
+            );
+            if r.drag_stopped() || (r.changed() && !r.dragged()) {
+                app.ui.samples = n;
+                set(app, vec![("samples", n.to_string())]);
+            } else {
+                app.ui.samples = n;
+            }
+        }
+        "fitted" | "budget" => {
+            let r1 = ui.add(
+                egui::Slider::new(&mut t, 0.05..=5.0)
+                    .text("tolerance ΔE")
+                    .logarithmic(true),
+            );
+            let mut r2 = None;
+            if mode == "budget" {
+                r2 = Some(ui.add(egui::Slider::new(&mut b, 1..=32).text("max nodes")));
+            }
+            app.ui.tolerance = t;
+            app.ui.budget = b;
+            let done = |r: &egui::Response| r.drag_stopped() || (r.changed() && !r.dragged());
+            if done(&r1) || r2.as_ref().is_some_and(done) {
+                let mut e = vec![("tolerance", format!("{}", (t * 1000.0).round() / 1000.0))];
+                if mode == "budget" {
+                    e.push(("max-nodes", b.to_string()));
+                }
+                set(app, e);
+            }
+        }
+        _ => {}
+    }
+}
+
+fn status(app: &App) -> String {
+    let w = &app.in_use;
+    let mut s = format!(
+        "{} | {} nodes ({})",
+        app.backend,
+        w.quadrature.len(),
+        w.kind
+    );
+    if let Some(e) = w.estimate {
+        s += &format!(", estimate ΔE {e:.3}");
+    }
+    if let Some(f) = &app.last {
+        s += &format!(" | frame {:.0} ms", f.render_ms);
+        if f.prepare_ms > 1.0 {
+            s += &format!(" + prepare {:.0} ms", f.prepare_ms);
+        }
+    }
+    if let Some(r) = &app.fit {
+        let stage = r.stage.lock().map(|m| m.clone()).unwrap_or_default();
+        s += &format!(
+            " | {}: {stage} [{:.0} s]",
+            app.fit_note,
+            r.started.elapsed().as_secs_f64()
+        );
+    }
+    s
+}
+
+pub(crate) fn draw(app: &mut App, ui: &mut egui::Ui) {
+    if ui.input(|i| i.key_pressed(egui::Key::C)) && !ui.ctx().egui_wants_keyboard_input() {
+        app.print_command();
+    }
+    egui::Panel::bottom("status").show(ui, |ui| {
+        ui.label(status(app));
+        if let Some(e) = &app.error {
+            ui.colored_label(Color32::from_rgb(230, 90, 80), e);
+        }
+    });
+    egui::Panel::left("controls")
+        .default_size(330.0)
+        .show(ui, |ui| {
+            egui::ScrollArea::vertical().show(ui, |ui| controls(app, ui));
+        });
+    if app.probe.is_some() {
+        egui::Panel::right("probe")
+            .default_size(320.0)
+            .show(ui, |ui| probe(app, ui));
+    }
+    egui::CentralPanel::default().show(ui, |ui| picture(app, ui));
+}
+
+fn picture(app: &mut App, ui: &mut egui::Ui) {
+    let Some(tex) = app.texture() else {
+        ui.label("rendering the first frame...");
+        return;
+    };
+    let size = tex.size_vec2();
+    let avail = ui.available_size();
+    let k = (avail.x / size.x).min(avail.y / size.y).min(1.0).max(0.05);
+    let r = ui.add(egui::Image::new((tex.id(), size * k)).sense(egui::Sense::click_and_drag()));
+    if r.dragged() {
+        let d = r.drag_delta();
+        let [y, p] = app.ui.orbit;
+        let (y, p) = (
+            y - d.x as f64 * 0.4,
+            (p + d.y as f64 * 0.4).clamp(-90.0, 90.0),
+        );
+        app.ui.orbit = [y, p];
+        app.change(&[("orbit", Some(format!("{y:.1},{p:.1}")))]);
+    }
+    if r.clicked() {
+        if let Some(pos) = r.interact_pointer_pos() {
+            let v = (pos - r.rect.min) / k;
+            let (x, y) = (v.x.max(0.0) as usize, v.y.max(0.0) as usize);
+            app.probe_at(x, y);
+        }
+    }
+    if r.hovered() {
+        let s = ui.input(|i| i.smooth_scroll_delta.y);
+        if s != 0.0 {
+            let z = app.args.zoom.unwrap_or(1.0) * (s as f64 / 200.0).exp();
+            app.change(&[("zoom", Some(format!("{:.3}", z.clamp(0.25, 8.0))))]);
+        }
+    }
+}
+
+fn probe(app: &mut App, ui: &mut egui::Ui) {
+    let Some(p) = &app.probe else { return };
+    ui.heading(format!("Pixel ({}, {})", p.at[0], p.at[1]));
+    let plot_size = Vec2::new(ui.available_width(), 180.0);
+    let (rect, _) = ui.allocate_exact_size(plot_size, egui::Sense::hover());
+    let painter = ui.painter_at(rect);
+    painter.rect_filled(rect, 2.0, Color32::from_gray(24));
+    let x = |wl: f64| rect.left() + ((wl - 380.0) / 400.0) as f32 * rect.width();
+    let peak = p.radiance.iter().cloned().fold(0.0f64, f64::max).max(1e-12);
+    let y = |v: f64| rect.bottom() - (v as f32).clamp(0.0, 1.05) * rect.height() * 0.92;
+    for &n in &p.nodes_nm {
+        painter.line_segment(
+            [Pos2::new(x(n), rect.top()), Pos2::new(x(n), rect.bottom())],
+            Stroke::new(1.0, Color32::from_rgb(90, 90, 140)),
+        );
+    }
+    if let Some(r) = &p.film_reflectance {
+        let pts: Vec<Pos2> = p
+            .wavelengths_nm
+            .iter()
+            .zip(r)
+            .map(|(w, v)| Pos2::new(x(*w), y(*v)))
+            .collect();
+        painter.add(egui::Shape::line(
+            pts,
+            Stroke::new(1.2, Color32::from_rgb(220, 170, 60)),
+        ));
+    }
+    let pts: Vec<Pos2> = p
+        .wavelengths_nm
+        .iter()
+        .zip(&p.radiance)
+        .map(|(w, v)| Pos2::new(x(*w), y(v / peak)))
+        .collect();
+    painter.add(egui::Shape::line(pts, Stroke::new(1.6, Color32::WHITE)));
+    ui.small("white: radiance (1 nm, peak scaled to the top); orange: film R(λ) (0..1); blue: nodes in use");
+    ui.monospace(format!(
+        "XYZ  {:.4} {:.4} {:.4}\nxy   {:.4} {:.4}\nLab  {:.2} {:.2} {:.2}\nsRGB {} {} {}\nview angle {}\nquadrature error ΔE2000 {:.4}\nradiance peak {:.4}",
+        p.xyz[0], p.xyz[1], p.xyz[2], p.xy[0], p.xy[1], p.lab[0], p.lab[1], p.lab[2],
+        p.srgb8[0], p.srgb8[1], p.srgb8[2],
+        p.view_angle_deg.map_or("-".into(), |a| format!("{a:.1}°")),
+        p.error_de2000, peak
+    ));
+    if ui.button("close").clicked() {
+        app.probe = None;
+    }
+}

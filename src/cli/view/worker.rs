@@ -1,0 +1,185 @@
+//! The view's renderer thread: it builds the scene a frame asks for (the map loaded once per
+//! file and light), prepares it for the frame's quadrature (once per scene and quadrature),
+//! renders it on the GPU (or the CPU where `--backend cpu` says so) and probes pixels. The
+//! window sends jobs and draws what comes back; the newest frame job replaces any still queued.
+
+use crate::cli::render::{self, BackendArg, RenderArgs};
+use specmap::colorimetry::RgbSpace;
+use specmap::quadrature::Quadrature;
+use specmap::render::env::EnvReport;
+use specmap::render::gpu::Gpu;
+use specmap::render::prepare::Prepared;
+use specmap::render::{cpu, Image, Lighting, Scene};
+use std::collections::HashMap;
+use std::path::PathBuf;
+use std::sync::mpsc::{Receiver, Sender};
+use std::sync::Arc;
+use std::time::Instant;
+
+/// The wavelengths a frame uses, and what they are called in the status line and report.
+#[derive(Debug, Clone)]
+pub(crate) struct Wavelengths {
+    pub quadrature: Arc<Quadrature>,
+    /// `uniform`, `meyer` or `scene` (fitted), as `render --json` names kinds.
+    pub kind: String,
+    /// A fitted set's estimate (CIEDE2000 over the scene's stimuli).
+    pub estimate: Option<f64>,
+    /// Changes whenever the set does.
+    pub id: u64,
+}
+
+pub(crate) enum Job {
+    /// Render `args` (the settings as parsed; `key` says what the scene depends on).
+    Frame {
+        args: Box<RenderArgs>,
+        key: String,
+        wavelengths: Wavelengths,
+    },
+    /// Pixel (x, y) of the last frame's scene: its spectrum at 1 nm and its colour both ways.
+    Probe {
+        x: usize,
+        y: usize,
+        observer: specmap::colorimetry::Observer,
+    },
+}
+
+pub(crate) struct Frame {
+    pub image: Image,
+    /// Preparing the scene for the quadrature (0 when the last one was reused) and rendering.
+    pub prepare_ms: f64,
+    pub render_ms: f64,
+    pub nodes: usize,
+    pub kind: String,
+}
+
+pub(crate) enum Done {
+    Frame(Box<Frame>),
+    Probe(Box<super::probe::Probe>),
+    Failed(String),
+}
+
+/// What the renderer runs on, for the status line.
+pub(crate) fn open_backend(backend: BackendArg) -> (Option<Gpu>, String) {
+    let gpu = match backend {
+        BackendArg::Cpu => None,
+        _ => match Gpu::new() {
+            Ok(g) => Some(g),
+            Err(e) => {
+                eprintln!(
+                    "note: the view renders on the CPU: {}",
+                    e.to_string().lines().next().unwrap_or_default()
+                );
+                None
+            }
+        },
+    };
+    let name = match &gpu {
+        Some(g) => {
+            let a = g.adapter();
+            format!("GPU {} ({})", a.name, a.backend)
+        }
+        None => "CPU (rayon)".to_string(),
+    };
+    (gpu, name)
+}
+
+struct Cache {
+    envs: HashMap<(PathBuf, String), (Lighting, EnvReport)>,
+    /// The last prepared scene: (scene key, quadrature id).
+    prepared: Option<((String, u64), Arc<Scene>, Option<EnvReport>, Arc<Prepared>)>,
+}
+
+/// Runs jobs until the window hangs up.
+pub(crate) fn run(gpu: Option<Gpu>, jobs: Receiver<Job>, done: Sender<Done>, wake: impl Fn()) {
+    let mut cache = Cache {
+        envs: HashMap::new(),
+        prepared: None,
+    };
+    while let Ok(mut job) = jobs.recv() {
+        // A newer frame makes the queued ones moot; a probe is never dropped.
+        while let Ok(next) = jobs.try_recv() {
+            if matches!(job, Job::Frame { .. }) {
+                job = next;
+            } else {
+                let _ = done.send(one(&gpu, &mut cache, job));
+                job = next;
+            }
+        }
+        if done.send(one(&gpu, &mut cache, job)).is_err() {
+            return;
+        }
+        wake();
+    }
+}
+
+fn one(gpu: &Option<Gpu>, cache: &mut Cache, job: Job) -> Done {
+    let out = match job {
+        Job::Frame {
+            args,
+            key,
+            wavelengths,
+        } => frame(gpu, cache, &args, key, &wavelengths).map(|f| Done::Frame(Box::new(f))),
+        Job::Probe { x, y, observer } => match &cache.prepared {
+            Some((_, scene, _, p)) => {
+                super::probe::probe(scene, p, x, y, observer).map(|p| Done::Probe(Box::new(p)))
+            }
+            None => Err(anyhow::anyhow!("no frame to probe yet")),
+        },
+    };
+    out.unwrap_or_else(|e| Done::Failed(format!("{e:#}")))
+}
+
+/// The scene `args` describe, its map loaded once per file and light.
+pub(crate) fn scene(
+    args: &RenderArgs,
+    envs: &mut HashMap<(PathBuf, String), (Lighting, EnvReport)>,
+) -> anyhow::Result<(Scene, Option<EnvReport>)> {
+    let lighting = match &args.env {
+        Some(p) => {
+            let k = (p.clone(), args.light.clone());
+            if !envs.contains_key(&k) {
+                if let Some(l) = render::load_env(args)? {
+                    envs.insert(k.clone(), l);
+                }
+            }
+            envs.get(&k).cloned()
+        }
+        None => None,
+    };
+    let (lighting, report) = lighting.unzip();
+    let scene = render::scene_from(args, args.preset(), args.image_size()?, lighting)?;
+    Ok((scene, report))
+}
+
+fn frame(
+    gpu: &Option<Gpu>,
+    cache: &mut Cache,
+    args: &RenderArgs,
+    key: String,
+    w: &Wavelengths,
+) -> anyhow::Result<Frame> {
+    let t0 = Instant::now();
+    let k = (key, w.id);
+    let reuse = matches!(&cache.prepared, Some((have, ..)) if *have == k);
+    if !reuse {
+        let (scene, env) = scene(args, &mut cache.envs)?;
+        let p = Prepared::with_quadrature(&scene, &w.quadrature, RgbSpace::SRGB)?;
+        cache.prepared = Some((k, Arc::new(scene), env, Arc::new(p)));
+    }
+    let Some((.., p)) = &cache.prepared else {
+        unreachable!("prepared above")
+    };
+    let prepare_ms = t0.elapsed().as_secs_f64() * 1e3;
+    let t1 = Instant::now();
+    let image = match gpu {
+        Some(g) => g.render(p)?.0,
+        None => cpu::render(p),
+    };
+    Ok(Frame {
+        image,
+        prepare_ms,
+        render_ms: t1.elapsed().as_secs_f64() * 1e3,
+        nodes: w.quadrature.len(),
+        kind: w.kind.clone(),
+    })
+}
