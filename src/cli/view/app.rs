@@ -190,6 +190,10 @@ impl App {
             if r.covers.misses(&now).is_none() {
                 return;
             }
+            // One fit at a time: the refit starts when this one ends.
+            self.fit_note = format!("refit waits: {}", r.covers.misses(&now).unwrap_or_default());
+            self.use_interim();
+            return;
         }
         let why = match (&self.fitted, &self.fit) {
             (Some((c, ..)), _) | (None, Some(Running { covers: c, .. })) => {
@@ -213,14 +217,19 @@ impl App {
             Ok(r) => {
                 self.fit = Some(r);
                 self.fit_note = why;
-                if let Ok(w) = interim(&self.args) {
-                    if self.in_use.kind != "uniform (interim)" {
-                        let id = self.id();
-                        self.in_use = Wavelengths { id, ..w };
-                    }
-                }
+                self.use_interim();
             }
             Err(e) => self.error = Some(format!("{e:#}")),
+        }
+    }
+
+    /// The interim grid while no fit covers the settings.
+    fn use_interim(&mut self) {
+        if let Ok(w) = interim(&self.args) {
+            if self.in_use.kind != w.kind || *self.in_use.quadrature != *w.quadrature {
+                let id = self.id();
+                self.in_use = Wavelengths { id, ..w };
+            }
         }
     }
 
@@ -278,9 +287,6 @@ impl App {
                     self.error = Some(e.clone());
                     self.report.errors.push(e);
                 }
-            }
-            if self.waiting == Some(Wait::Quadrature) {
-                self.waiting = None;
             }
         }
     }
