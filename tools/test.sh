@@ -47,6 +47,19 @@ if ! command -v parallel >/dev/null 2>&1; then
     exit 1
   fi
 fi
+step "Xvfb for the view's window tests (Debian package xvfb)"
+# tests/view.rs opens \`specmap view\` in a real window on a private Xvfb display (lavapipe
+# draws it); a missing Xvfb fails the suite, as a missing GPU adapter does.
+if ! command -v Xvfb >/dev/null 2>&1; then
+  if [ "$(id -u)" = 0 ]; then
+    export DEBIAN_FRONTEND=noninteractive
+    apt-get install -y -qq xvfb >/dev/null 2>&1 \
+      || { apt-get update -qq && apt-get install -y -qq xvfb >/dev/null; }
+  else
+    echo "Xvfb missing and not root: install the Debian package xvfb" >&2
+    exit 1
+  fi
+fi
 step "LLVM for Mitsuba's llvm_ad_spectral variant (Debian package libllvm19)"
 # tests/interop/test_mitsuba.py runs the specmap_envmap emitter in llvm_ad_spectral too; Dr.Jit
 # crashes with the stock LLVM 15, so it is pointed at LLVM 19 (the test skips without one).

@@ -497,3 +497,50 @@ impl Scene {
         Ok(cpu::render_pixels(&p, at))
     }
 }
+
+#[cfg(test)]
+mod orbit_tests {
+    use super::*;
+
+    #[test]
+    fn an_orbit_is_a_rotation_whose_view_direction_is_the_documented_one() {
+        let o = Orbit {
+            yaw_deg: 37.0,
+            pitch_deg: -21.0,
+        };
+        let r = o.rotation();
+        for i in 0..3 {
+            for j in 0..3 {
+                let d: f64 = (0..3).map(|k| r[k][i] * r[k][j]).sum();
+                assert!((d - if i == j { 1.0 } else { 0.0 }).abs() < 1e-12);
+            }
+        }
+        let (y, p) = (37f64.to_radians(), (-21f64).to_radians());
+        let view = rotate(&r, [0.0, 0.0, -1.0]);
+        let want = [-y.sin() * p.cos(), p.sin(), -y.cos() * p.cos()];
+        for k in 0..3 {
+            assert!((view[k] - want[k]).abs() < 1e-12, "{view:?} {want:?}");
+        }
+        let v = [0.3, -0.5, 0.81];
+        let back = rotate_back(&r, rotate(&r, v));
+        assert!((0..3).all(|k| (back[k] - v[k]).abs() < 1e-12));
+    }
+
+    /// The sun turns into the camera's frame: the world's sun direction seen from the camera.
+    #[test]
+    fn orbiting_turns_the_sun_into_the_cameras_frame() {
+        let sun = Sun {
+            direction: [0.0, 0.0, -1.0],
+            irradiance: 1.0,
+        };
+        let mut s = Preset::Ball.scene(8, 8, "D65", None).unwrap();
+        s.lightings[0].sun = Some(sun);
+        // Turned 180 degrees about Y, the camera looks along +Z: a sun along -Z is behind it.
+        s.orbit(Orbit {
+            yaw_deg: 180.0,
+            pitch_deg: 0.0,
+        });
+        let d = s.lightings[0].sun.unwrap().direction;
+        assert!((d[2] - 1.0).abs() < 1e-12, "{d:?}");
+    }
+}

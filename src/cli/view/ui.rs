@@ -369,7 +369,7 @@ fn picture(app: &mut App, ui: &mut egui::Ui) {
     };
     let size = tex.size_vec2();
     let avail = ui.available_size();
-    let k = (avail.x / size.x).min(avail.y / size.y).min(1.0).max(0.05);
+    let k = (avail.x / size.x).min(avail.y / size.y).clamp(0.05, 1.0);
     let r = ui.add(egui::Image::new((tex.id(), size * k)).sense(egui::Sense::click_and_drag()));
     if r.dragged() {
         let d = r.drag_delta();

@@ -83,10 +83,16 @@ pub(crate) fn open_backend(backend: BackendArg) -> (Option<Gpu>, String) {
     (gpu, name)
 }
 
+/// The last scene prepared, under (scene key, quadrature id).
+struct Last {
+    key: (String, u64),
+    scene: Scene,
+    prepared: Prepared,
+}
+
 struct Cache {
     envs: HashMap<(PathBuf, String), (Lighting, EnvReport)>,
-    /// The last prepared scene: (scene key, quadrature id).
-    prepared: Option<((String, u64), Arc<Scene>, Option<EnvReport>, Arc<Prepared>)>,
+    prepared: Option<Last>,
 }
 
 /// Runs jobs until the window hangs up.
@@ -120,9 +126,8 @@ fn one(gpu: &Option<Gpu>, cache: &mut Cache, job: Job) -> Done {
             wavelengths,
         } => frame(gpu, cache, &args, key, &wavelengths).map(|f| Done::Frame(Box::new(f))),
         Job::Probe { x, y, observer } => match &cache.prepared {
-            Some((_, scene, _, p)) => {
-                super::probe::probe(scene, p, x, y, observer).map(|p| Done::Probe(Box::new(p)))
-            }
+            Some(l) => super::probe::probe(&l.scene, &l.prepared, x, y, observer)
+                .map(|p| Done::Probe(Box::new(p))),
             None => Err(anyhow::anyhow!("no frame to probe yet")),
         },
     };
@@ -160,13 +165,17 @@ fn frame(
 ) -> anyhow::Result<Frame> {
     let t0 = Instant::now();
     let k = (key, w.id);
-    let reuse = matches!(&cache.prepared, Some((have, ..)) if *have == k);
+    let reuse = matches!(&cache.prepared, Some(l) if l.key == k);
     if !reuse {
-        let (scene, env) = scene(args, &mut cache.envs)?;
-        let p = Prepared::with_quadrature(&scene, &w.quadrature, RgbSpace::SRGB)?;
-        cache.prepared = Some((k, Arc::new(scene), env, Arc::new(p)));
+        let scene = scene(args, &mut cache.envs)?.0;
+        let prepared = Prepared::with_quadrature(&scene, &w.quadrature, RgbSpace::SRGB)?;
+        cache.prepared = Some(Last {
+            key: k,
+            scene,
+            prepared,
+        });
     }
-    let Some((.., p)) = &cache.prepared else {
+    let Some(Last { prepared: p, .. }) = &cache.prepared else {
         unreachable!("prepared above")
     };
     let prepare_ms = t0.elapsed().as_secs_f64() * 1e3;
