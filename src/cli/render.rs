@@ -87,6 +87,12 @@ pub struct RenderArgs {
     /// (searched from fresh starts), reported with how far it misses, on the image too.
     #[arg(long, value_name = "N", requires = "tolerance")]
     pub(crate) max_nodes: Option<usize>,
+    /// With --tolerance: fit the wavelengths as `specmap view` does, for every orientation of
+    /// the camera and each film's thickness scaled by 1 ± F, or from S0 to S1 times its
+    /// thickness (the view's command carries its fit's range, so that `render` fits the same
+    /// wavelengths; the view's default is 0.15).
+    #[arg(long, value_name = "F|S0:S1", requires = "tolerance")]
+    pub(crate) fit_range: Option<String>,
     /// Which wavelengths and weights: `scene` fits them to the scene (needs --tolerance, and is
     /// its default), `uniform` is the --step/--samples grid (or, with --tolerance, the coarsest
     /// step at its best rule), `meyer` is Meyer's four-wavelength Gaussian quadrature.
@@ -284,6 +290,7 @@ impl RenderArgs {
         opt("samples", self.samples.map(|v| v.to_string()));
         opt("tolerance", num(self.tolerance));
         opt("max-nodes", self.max_nodes.map(|v| v.to_string()));
+        opt("fit-range", self.fit_range.clone());
         opt("quadrature", self.quadrature.map(|q| name(&q)));
         opt(
             "rule",
@@ -389,7 +396,14 @@ pub fn run(a: RenderArgs) -> anyhow::Result<()> {
     let scene = scene_from(&a, preset, (w, h), lighting)?;
     let spectral = spectral_of(&a)?;
     let aim = a.tolerance.map(|t| (t, a.max_nodes));
-    let (quadrature, selection) = quadrature_for(&scene, &spectral, a.quadrature, aim)?;
+    let (quadrature, selection) = match a.fit_range.as_deref().map(fit_range).transpose()? {
+        Some(scales) => {
+            let mut fit_scene = scene.clone();
+            fit_scene.for_any_view(scales);
+            quadrature_for(&fit_scene, &spectral, a.quadrature, aim)?
+        }
+        None => quadrature_for(&scene, &spectral, a.quadrature, aim)?,
+    };
     // The backend.
     let gpu = match a.backend {
         BackendArg::Cpu => None,
@@ -594,6 +608,33 @@ pub(crate) fn scene_from(
         scene.orbit(orbit(o)?);
     }
     Ok(scene)
+}
+
+/// `--fit-range F` (1 ± F) or `S0:S1`: the thickness scales a view's fit covers.
+pub(crate) fn fit_range(spec: &str) -> anyhow::Result<(f64, f64)> {
+    let bad = || {
+        anyhow::anyhow!(
+            "--fit-range '{spec}' must be a spread F between 0 and 1 (0.15: 15% either way) or \
+             scales S0:S1 with 0 <= S0 <= S1"
+        )
+    };
+    let (s0, s1) = match spec.split_once(':') {
+        Some((a, b)) => (
+            a.trim().parse::<f64>().map_err(|_| bad())?,
+            b.trim().parse::<f64>().map_err(|_| bad())?,
+        ),
+        None => {
+            let f: f64 = spec.trim().parse().map_err(|_| bad())?;
+            if !(0.0..1.0).contains(&f) {
+                return Err(bad());
+            }
+            (1.0 - f, 1.0 + f)
+        }
+    };
+    if !(s0.is_finite() && s1.is_finite() && 0.0 <= s0 && s0 <= s1) {
+        return Err(bad());
+    }
+    Ok((s0, s1))
 }
 
 /// `--orbit YAW,PITCH`.

@@ -398,6 +398,27 @@ impl Scene {
         }
     }
 
+    /// The scene a choice of quadrature must hold for when the camera may turn and each main
+    /// film's thickness may scale from `scales.0` to `scales.1` (what `specmap view` fits, so
+    /// that orbiting and a thickness drag inside the range need no refit):
+    /// [`Scene::any_orientation`] set, and each main object's film without a ramp given one
+    /// over those scales (the stimuli sample a ramp's whole range).
+    pub fn for_any_view(&mut self, scales: (f64, f64)) {
+        self.any_orientation = true;
+        let half = self.view.half_height * self.width as f64 / self.height as f64;
+        let (x0, x1) = (self.view.center[0] - half, self.view.center[0] + half);
+        for o in self.objects.iter_mut().filter(|o| o.main) {
+            if o.surface.film.is_some() && o.ramp.is_none() && scales.0 != scales.1 {
+                o.ramp = Some(Ramp {
+                    x0,
+                    x1,
+                    s0: scales.0,
+                    s1: scales.1,
+                });
+            }
+        }
+    }
+
     /// Checks the scene's consistency (indices, sizes, films) before any work is done.
     pub fn validate(&self) -> Result<()> {
         if self.width == 0 || self.height == 0 {

@@ -383,7 +383,16 @@ impl App {
 
     /// The command that renders the view, printed (stderr under --json) and kept.
     pub(super) fn print_command(&mut self) {
-        let c = self.settings.command("view.png");
+        // A fitted view's nodes come from a fit over a range of thicknesses: render fits the
+        // same range (relative to the film now) to use the same nodes.
+        let range = match (&self.fitted, fit::now(&self.settings, &self.args)) {
+            (Some((covers, ..)), Ok(now)) if self.in_use.kind == "scene" => {
+                fit::range_for(covers, &now)
+            }
+            _ if self.args.tolerance.is_some() => Some(fit::COVER.to_string()),
+            _ => None,
+        };
+        let c = self.settings.command("view.png", range);
         if self.json {
             eprintln!("{c}");
         } else {

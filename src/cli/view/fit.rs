@@ -9,7 +9,7 @@
 use crate::cli::render::{tolerance_options, QuadratureArg, RenderArgs};
 use specmap::quadrature::choose::{Family, Selection};
 use specmap::quadrature::Quadrature;
-use specmap::render::{Film, Ramp, Scene};
+use specmap::render::{Film, Scene};
 use std::sync::mpsc::{channel, Receiver};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
@@ -103,12 +103,26 @@ fn main_films(scene: &Scene) -> Vec<Option<Film>> {
         .collect()
 }
 
-/// The scales a fit covers: [`COVER`] either way of the films' thicknesses (none without one).
-fn sweep_scales(films: &[Option<Film>]) -> (f64, f64) {
+/// The scales a fit covers: `--fit-range`'s, else [`COVER`] either way of the films'
+/// thicknesses (none without a film).
+fn sweep_scales(films: &[Option<Film>], range: Option<&str>) -> anyhow::Result<(f64, f64)> {
     if films.iter().flatten().next().is_none() {
-        return (1.0, 1.0);
+        return Ok((1.0, 1.0));
     }
-    (1.0 - COVER, 1.0 + COVER)
+    match range {
+        Some(r) => crate::cli::render::fit_range(r),
+        None => Ok((1.0 - COVER, 1.0 + COVER)),
+    }
+}
+
+/// The `--fit-range` that makes `render` fit what `fitted` covers, for the films `now` has.
+pub(crate) fn range_for(fitted: &Covers, now: &Covers) -> Option<String> {
+    let k = fitted
+        .films
+        .iter()
+        .zip(&now.films)
+        .find_map(|(a, b)| scale_between(a.as_ref()?, b.as_ref()?))?;
+    Some(format!("{}:{}", fitted.scales.0 / k, fitted.scales.1 / k))
 }
 
 /// How the settings choose wavelengths.
@@ -188,7 +202,7 @@ pub(crate) fn start(
             let run = || -> anyhow::Result<Selection> {
                 let mut scene =
                     super::worker::scene(&args, &mut std::collections::HashMap::new())?.0;
-                cover(&mut scene, scales);
+                scene.for_any_view(scales);
                 let report = |s: &specmap::quadrature::progress::Stage| {
                     if let Ok(mut m) = st.lock() {
                         *m = s.to_string();
@@ -213,30 +227,13 @@ pub(crate) fn start(
     })
 }
 
-/// What the view fits: `scene` for every orientation, each main film without a ramp over
-/// the thickness scales `scales` (the stimuli sample a ramp's whole range).
-fn cover(scene: &mut Scene, scales: (f64, f64)) {
-    scene.any_orientation = true;
-    let half = scene.view.half_height * scene.width as f64 / scene.height as f64;
-    for o in scene.objects.iter_mut().filter(|o| o.main) {
-        if o.surface.film.is_some() && o.ramp.is_none() && scales.0 < scales.1 {
-            o.ramp = Some(Ramp {
-                x0: scene.view.center[0] - half,
-                x1: scene.view.center[0] + half,
-                s0: scales.0,
-                s1: scales.1,
-            });
-        }
-    }
-}
-
 /// What a fit started now for `settings` would cover.
 pub(crate) fn covers(
     settings: &super::settings::Settings,
     args: &RenderArgs,
 ) -> anyhow::Result<Covers> {
     let films = films(args)?;
-    let scales = sweep_scales(&films);
+    let scales = sweep_scales(&films, args.fit_range.as_deref())?;
     Ok(Covers {
         key: settings.without(&VIEW_ONLY),
         films,
@@ -283,17 +280,17 @@ mod tests {
         };
         assert_eq!(
             check(&with(&[
-                ("film", "2.7:350"),
+                ("film", "2.7:300"),
                 ("orbit", "40,10"),
                 ("zoom", "2")
             ])),
             None
         );
         assert_eq!(
-            check(&with(&[("film", "2.7:120"), ("exposure", "-1")])),
+            check(&with(&[("film", "2.7:240"), ("exposure", "-1")])),
             None
         );
-        assert!(check(&with(&[("film", "2.7:450")]))
+        assert!(check(&with(&[("film", "2.7:350")]))
             .unwrap()
             .contains("range"));
         assert!(check(&with(&[("film", "2.3:270")]))

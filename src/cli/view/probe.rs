@@ -18,7 +18,7 @@ pub(crate) struct Probe {
     pub radiance: Vec<f64>,
     /// The quadrature's nodes.
     pub nodes_nm: Vec<f64>,
-    /// The colour of the 1 nm spectrum: XYZ (a white under the main light has Y = 1), xy,
+    /// The colour of the 1 nm spectrum: XYZ (a white under the main light has Y = 100), xy,
     /// CIELAB (relative to RGB white), linear sRGB and 8-bit sRGB.
     pub xyz: [f64; 3],
     pub xy: [f64; 2],

@@ -77,12 +77,20 @@ impl Settings {
             .collect()
     }
 
-    /// The `specmap render` command that renders what the view shows, to `output`.
-    pub(crate) fn command(&self, output: &str) -> String {
+    /// The `specmap render` command that renders what the view shows, to `output`, with
+    /// `fit_range` (the range the view's fit covers) in place of the settings' own.
+    pub(crate) fn command(&self, output: &str, fit_range: Option<String>) -> String {
         let mut words = vec!["specmap".to_string(), "render".to_string()];
         for (k, v) in &self.pairs {
+            if k == "fit-range" && fit_range.is_some() {
+                continue;
+            }
             words.push(format!("--{k}"));
             words.push(quote(v));
+        }
+        if let Some(r) = fit_range {
+            words.push("--fit-range".into());
+            words.push(r);
         }
         words.push("-o".into());
         words.push(quote(output));
@@ -137,13 +145,13 @@ mod tests {
             ("orbit", "30,-10"),
             ("diffuse", "my lamp.csv"),
         ]);
-        let cmd = s.command("view.png");
+        let cmd = s.command("view.png", None);
         assert!(
             cmd.starts_with("specmap render --film 2.7:250,1.38:100"),
             "{cmd}"
         );
         assert!(cmd.contains("--diffuse 'my lamp.csv'"), "{cmd}");
         assert!(cmd.ends_with("-o view.png"), "{cmd}");
-        assert_eq!(s.parse().unwrap().to_pairs().len(), 5);
+        assert_eq!(s.parse().unwrap().to_pairs().len(), 4); // --scene ball is the default
     }
 }
