@@ -14,6 +14,7 @@ pub(crate) struct UiState {
     /// The film's layers: index text and thickness in nm.
     layers: Vec<(String, f64)>,
     pub(super) orbit: [f64; 2],
+    size: String,
     samples: usize,
     tolerance: f64,
     budget: usize,
@@ -57,6 +58,10 @@ impl UiState {
             diffuse: text("diffuse"),
             layers,
             orbit,
+            size: args
+                .as_ref()
+                .and_then(|a| a.image_size().ok())
+                .map_or(String::new(), |(w, h)| format!("{w}x{h}")),
             samples: args.as_ref().and_then(|a| a.samples).unwrap_or(81),
             tolerance: args.as_ref().and_then(|a| a.tolerance).unwrap_or(0.5),
             budget: args.as_ref().and_then(|a| a.max_nodes).unwrap_or(8),
@@ -88,6 +93,19 @@ fn text_option(
         if r.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter)) {
             let v = pick(&mut app.ui).trim().to_string();
             app.change(&[(key, (!v.is_empty()).then_some(v))]);
+        }
+    });
+}
+
+/// One of `values` for option `key` (`default` when unset), as buttons.
+fn choice(ui: &mut egui::Ui, app: &mut App, key: &str, default: &str, values: &[&str]) {
+    let now = app.settings.get(key).unwrap_or(default).to_string();
+    ui.horizontal(|ui| {
+        ui.label(key);
+        for v in values {
+            if ui.selectable_label(now == *v, *v).clicked() && now != *v {
+                app.change(&[(key, Some(v.to_string()))]);
+            }
         }
     });
 }
@@ -216,8 +234,24 @@ fn controls(app: &mut App, ui: &mut egui::Ui) {
     {
         app.change(&[("exposure", Some(format!("{:.2}", e)))]);
     }
+    ui.horizontal(|ui| {
+        ui.label("size");
+        let r = ui.add(egui::TextEdit::singleline(&mut app.ui.size).desired_width(80.0));
+        if r.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter)) {
+            let v = app.ui.size.trim().to_string();
+            app.change(&[("size", (!v.is_empty()).then_some(v))]);
+        }
+    });
     ui.separator();
     wavelengths(app, ui);
+    choice(
+        ui,
+        app,
+        "rule",
+        "riemann",
+        &["riemann", "trapezoid", "simpson"],
+    );
+    choice(ui, app, "observer", "cie1931", &["cie1931", "cie1964"]);
     ui.separator();
     ui.horizontal(|ui| {
         if ui.button("command (C)").clicked() {
