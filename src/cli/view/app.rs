@@ -71,7 +71,6 @@ impl App {
         settings: Settings,
         jobs: Sender<Job>,
         done: Receiver<Done>,
-        backend: String,
         steps: Option<Vec<Step>>,
         json: bool,
         started: Instant,
@@ -86,11 +85,8 @@ impl App {
             error: None,
             jobs,
             done,
-            report: Report {
-                backend: backend.clone(),
-                ..Report::default()
-            },
-            backend,
+            report: Report::default(),
+            backend: "opening the renderer".into(),
             in_use: interim,
             fitted: None,
             fit: None,
@@ -237,6 +233,10 @@ impl App {
     fn poll(&mut self, ctx: &egui::Context) {
         while let Ok(d) = self.done.try_recv() {
             match d {
+                Done::Backend(b) => {
+                    self.report.backend = b.clone();
+                    self.backend = b;
+                }
                 Done::Frame(f) => self.show(ctx, *f),
                 Done::Probe(p) => {
                     self.report.probes.push((*p).clone());

@@ -73,7 +73,6 @@ pub fn run(a: ViewArgs) -> anyhow::Result<()> {
     let (scene, _) = worker::scene(&args, &mut envs)?;
     scene.validate()?;
     let (w, h) = (scene.width as f32, scene.height as f32);
-    let (gpu, backend) = worker::open_backend(args.backend);
     let (jobs, jobs_rx) = std::sync::mpsc::channel();
     let (done_tx, done) = std::sync::mpsc::channel();
     let report = Arc::new(Mutex::new(None));
@@ -90,10 +89,13 @@ pub fn run(a: ViewArgs) -> anyhow::Result<()> {
         options,
         Box::new(move |cc| {
             let ctx = cc.egui_ctx.clone();
+            let backend = args.backend;
             std::thread::Builder::new()
                 .name("specmap render".into())
-                .spawn(move || worker::run(gpu, jobs_rx, done_tx, move || ctx.request_repaint()))?;
-            let app = app::App::new(settings, jobs, done, backend, steps, json, started, out)?;
+                .spawn(move || {
+                    worker::run(backend, envs, jobs_rx, done_tx, move || ctx.request_repaint())
+                })?;
+            let app = app::App::new(settings, jobs, done, steps, json, started, out)?;
             Ok(Box::new(app))
         }),
     )

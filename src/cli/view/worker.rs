@@ -53,13 +53,15 @@ pub(crate) struct Frame {
 }
 
 pub(crate) enum Done {
+    /// The backend the renderer opened, in words (sent first).
+    Backend(String),
     Frame(Box<Frame>),
     Probe(Box<super::probe::Probe>),
     Failed(String),
 }
 
 /// What the renderer runs on, for the status line.
-pub(crate) fn open_backend(backend: BackendArg) -> (Option<Gpu>, String) {
+fn open_backend(backend: BackendArg) -> (Option<Gpu>, String) {
     let gpu = match backend {
         BackendArg::Cpu => None,
         _ => match Gpu::new() {
@@ -91,14 +93,29 @@ struct Last {
 }
 
 struct Cache {
-    envs: HashMap<(PathBuf, String), (Lighting, EnvReport)>,
+    envs: Envs,
     prepared: Option<Last>,
 }
 
-/// Runs jobs until the window hangs up.
-pub(crate) fn run(gpu: Option<Gpu>, jobs: Receiver<Job>, done: Sender<Done>, wake: impl Fn()) {
+/// The maps loaded so far, by file and light.
+pub(crate) type Envs = HashMap<(PathBuf, String), (Lighting, EnvReport)>;
+
+/// Opens the backend (while the window opens), then runs jobs until the window hangs up.
+pub(crate) fn run(
+    backend: BackendArg,
+    envs: Envs,
+    jobs: Receiver<Job>,
+    done: Sender<Done>,
+    wake: impl Fn(),
+) {
+    let (gpu, name) = open_backend(backend);
+    if let Some(g) = &gpu {
+        warm_up(g);
+    }
+    let _ = done.send(Done::Backend(name));
+    wake();
     let mut cache = Cache {
-        envs: HashMap::new(),
+        envs,
         prepared: None,
     };
     while let Ok(mut job) = jobs.recv() {
@@ -134,11 +151,19 @@ fn one(gpu: &Option<Gpu>, cache: &mut Cache, job: Job) -> Done {
     out.unwrap_or_else(|e| Done::Failed(format!("{e:#}")))
 }
 
+/// One tiny frame, so that the driver compiles the shader (lavapipe does on the first
+/// dispatch) before the first frame is asked for.
+fn warm_up(gpu: &Gpu) {
+    let tiny = specmap::render::Preset::Ball
+        .scene(1, 1, "D65", None)
+        .and_then(|s| Prepared::new(&s, &specmap::render::Spectral::samples(2)?));
+    if let Ok(p) = tiny {
+        let _ = gpu.render(&p);
+    }
+}
+
 /// The scene `args` describe, its map loaded once per file and light.
-pub(crate) fn scene(
-    args: &RenderArgs,
-    envs: &mut HashMap<(PathBuf, String), (Lighting, EnvReport)>,
-) -> anyhow::Result<(Scene, Option<EnvReport>)> {
+pub(crate) fn scene(args: &RenderArgs, envs: &mut Envs) -> anyhow::Result<(Scene, Option<EnvReport>)> {
     let lighting = match &args.env {
         Some(p) => {
             let k = (p.clone(), args.light.clone());
