@@ -93,7 +93,9 @@ pub fn run(a: ViewArgs) -> anyhow::Result<()> {
             std::thread::Builder::new()
                 .name("specmap render".into())
                 .spawn(move || {
-                    worker::run(backend, envs, jobs_rx, done_tx, move || ctx.request_repaint())
+                    worker::run(backend, envs, jobs_rx, done_tx, move || {
+                        ctx.request_repaint()
+                    })
                 })?;
             let app = app::App::new(settings, jobs, done, steps, json, started, out)?;
             Ok(Box::new(app))

@@ -163,7 +163,10 @@ fn warm_up(gpu: &Gpu) {
 }
 
 /// The scene `args` describe, its map loaded once per file and light.
-pub(crate) fn scene(args: &RenderArgs, envs: &mut Envs) -> anyhow::Result<(Scene, Option<EnvReport>)> {
+pub(crate) fn scene(
+    args: &RenderArgs,
+    envs: &mut Envs,
+) -> anyhow::Result<(Scene, Option<EnvReport>)> {
     let lighting = match &args.env {
         Some(p) => {
             let k = (p.clone(), args.light.clone());
