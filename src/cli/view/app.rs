@@ -63,6 +63,8 @@ pub(crate) struct App {
     out: Arc<Mutex<Option<Report>>>,
     pub(super) json: bool,
     pub(super) ui: super::ui::UiState,
+    /// Where the PNG and EXR buttons write (`-o`'s path, by extension; view.png by default).
+    pub(super) output: PathBuf,
 }
 
 impl App {
@@ -106,6 +108,7 @@ impl App {
             window_shot: Arc::default(),
             out,
             json,
+            output: PathBuf::from("view.png"),
         };
         app.follow_mode(None);
         Ok(app)
@@ -251,7 +254,10 @@ impl App {
                     self.pending = false;
                     self.error = Some(e.clone());
                     self.report.errors.push(e);
-                    if matches!(self.waiting, Some(Wait::Probe(_))) {
+                    if self.scripted {
+                        // Nothing the script waits for will come: it ends here (and the
+                        // command exits non-zero with the error).
+                        self.steps.clear();
                         self.waiting = None;
                     }
                 }
@@ -545,6 +551,15 @@ pub(crate) fn interim(args: &RenderArgs) -> anyhow::Result<Wavelengths> {
 }
 
 impl eframe::App for App {
+    /// A window closed by hand leaves its report too (printed under --json).
+    fn on_exit(&mut self) {
+        if let Ok(mut o) = self.out.lock() {
+            if o.is_none() {
+                *o = Some(self.report.clone());
+            }
+        }
+    }
+
     fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
         let ctx = ui.ctx().clone();
         self.poll(&ctx);

@@ -78,6 +78,7 @@ pub fn run(a: ViewArgs) -> anyhow::Result<()> {
     let report = Arc::new(Mutex::new(None));
     let out = report.clone();
     let json = a.render.json;
+    let output = a.render.output.clone();
     let options = eframe::NativeOptions {
         viewport: eframe::egui::ViewportBuilder::default()
             .with_title("specmap view")
@@ -97,7 +98,10 @@ pub fn run(a: ViewArgs) -> anyhow::Result<()> {
                         ctx.request_repaint()
                     })
                 })?;
-            let app = app::App::new(settings, jobs, done, steps, json, started, out)?;
+            let mut app = app::App::new(settings, jobs, done, steps, json, started, out)?;
+            if let Some(o) = output {
+                app.output = o;
+            }
             Ok(Box::new(app))
         }),
     )
@@ -107,7 +111,8 @@ pub fn run(a: ViewArgs) -> anyhow::Result<()> {
         if json {
             super::emit(&(serde_json::to_string_pretty(&r)? + "\n"));
         }
-        if let Some(e) = r.errors.first() {
+        let scripted = a.script.is_some();
+        if let (true, Some(e)) = (scripted, r.errors.first()) {
             anyhow::bail!("the script hit {} error(s); the first: {e}", r.errors.len());
         }
     }

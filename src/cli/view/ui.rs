@@ -258,10 +258,10 @@ fn controls(app: &mut App, ui: &mut egui::Ui) {
             app.print_command();
         }
         if ui.button("PNG").clicked() {
-            app.screenshot(std::path::Path::new("view.png"));
+            app.screenshot(&app.output.with_extension("png"));
         }
         if ui.button("EXR").clicked() {
-            app.screenshot(std::path::Path::new("view.exr"));
+            app.screenshot(&app.output.with_extension("exr"));
         }
         if ui.button("window").clicked() {
             app.screenshot_window(ui.ctx(), "view-window.png".into());
@@ -405,8 +405,8 @@ fn picture(app: &mut App, ui: &mut egui::Ui) {
     let avail = ui.available_size();
     let k = (avail.x / size.x).min(avail.y / size.y).clamp(0.05, 1.0);
     let r = ui.add(egui::Image::new((tex.id(), size * k)).sense(egui::Sense::click_and_drag()));
-    if r.dragged() {
-        let d = r.drag_delta();
+    let d = r.drag_delta();
+    if r.dragged() && d != Vec2::ZERO {
         let [y, p] = app.ui.orbit;
         let (y, p) = (
             y - d.x as f64 * 0.4,
