@@ -393,7 +393,7 @@ impl App {
         // same range (relative to the film now) to use the same nodes.
         let range = match (&self.fitted, fit::now(&self.settings, &self.args)) {
             (Some((covers, ..)), Ok(now)) if self.in_use.kind == "scene" => {
-                fit::range_for(covers, &now)
+                Some(fit::range_for(covers, &now))
             }
             _ if self.args.tolerance.is_some() => Some(fit::COVER.to_string()),
             _ => None,

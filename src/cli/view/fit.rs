@@ -115,14 +115,16 @@ fn sweep_scales(films: &[Option<Film>], range: Option<&str>) -> anyhow::Result<(
     }
 }
 
-/// The `--fit-range` that makes `render` fit what `fitted` covers, for the films `now` has.
-pub(crate) fn range_for(fitted: &Covers, now: &Covers) -> Option<String> {
+/// The `--fit-range` that makes `render` fit what `fitted` covers, for the films `now` has
+/// (`1:1` without a film: every orientation, as the view fits, and no thickness range).
+pub(crate) fn range_for(fitted: &Covers, now: &Covers) -> String {
     let k = fitted
         .films
         .iter()
         .zip(&now.films)
-        .find_map(|(a, b)| scale_between(a.as_ref()?, b.as_ref()?))?;
-    Some(format!("{}:{}", fitted.scales.0 / k, fitted.scales.1 / k))
+        .find_map(|(a, b)| scale_between(a.as_ref()?, b.as_ref()?))
+        .unwrap_or(1.0);
+    format!("{}:{}", fitted.scales.0 / k, fitted.scales.1 / k)
 }
 
 /// How the settings choose wavelengths.
@@ -296,6 +298,16 @@ mod tests {
         assert!(check(&with(&[("film", "2.3:270")]))
             .unwrap()
             .contains("layers"));
+        // The command's range: the fitted scales relative to the film now; 1:1 without one.
+        let (s2, a2) = at(&with(&[("film", "2.7:300")]));
+        let r = range_for(&fitted, &now(&s2, &a2).unwrap());
+        let (lo, hi) = crate::cli::render::fit_range(&r).unwrap();
+        assert!(
+            (lo * 300.0 - 0.85 * 270.0).abs() < 1e-9 && (hi * 300.0 - 1.15 * 270.0).abs() < 1e-9
+        );
+        let (s3, a3) = at(&[("scene", "checker-spheres"), ("tolerance", "0.5")]);
+        let c3 = covers(&s3, &a3).unwrap();
+        assert_eq!(range_for(&c3, &now(&s3, &a3).unwrap()), "1:1");
         assert!(check(&with(&[("film", "2.7:270"), ("light", "A")]))
             .unwrap()
             .contains("--light"));
