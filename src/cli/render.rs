@@ -32,6 +32,7 @@ Examples:
   specmap render --scene cylinders --tolerance 0.5 --max-nodes 8   # at most 8: the best 8 if 8 miss
   specmap render --scene ball --light FL2 --quadrature meyer -o meyer.png
   specmap render --scene chart --size 768x512 --exposure -0.5 -o chart.png
+  specmap render --scene ball --env envmaps/sunrise.exr --orbit 120,15 --zoom 1.5 -o turned.png
   specmap render --scene ball --film 1.38:100,2.1:130 --substrate bk7 -o coated.png
   specmap render --scene chart --size 384x256 --sweep 4,9,17,34,81,340 --sweep-out sweep/")]
 pub struct RenderArgs {
