@@ -7,6 +7,7 @@
 //! are bilinear, wrapping in longitude and clamped in latitude; `sample` here and `sample_map` in
 //! `gpu.wgsl` are the same function.
 
+use super::prefiltered::Lobe;
 use super::{Environment, LightSpectra, Lighting, Sun};
 use crate::colorimetry::{Observer, RgbSpace};
 use crate::envmap::exrio::{self, AttrValue, EnvmapAttr};
@@ -219,20 +220,30 @@ pub fn prefilter(env: &Environment, shininess: &[f64]) -> Filtered {
     // Cosine-weighted mean radiance = irradiance / pi (normalised by the discrete weights, so a
     // constant map stays exactly constant).
     let g = src.groups;
-    let diffuse = CoeffMap::from_fn_groups(DIFFUSE_ROWS, g, |n, out| {
-        filtered(src, &dirs, n, |c| c.max(0.0) as f32 as f64, out)
+    // A map's filtered maps are kept while it lives (a viewer prepares its scene again for
+    // every film it shows); a sky-and-ground environment's are made each time.
+    let kept = |lobe: Lobe, make: &dyn Fn() -> CoeffMap| match env {
+        Environment::Map(m) => super::prefiltered::get_or_make(m, lobe, make),
+        _ => make(),
+    };
+    let diffuse = kept(Lobe::Diffuse, &|| {
+        CoeffMap::from_fn_groups(DIFFUSE_ROWS, g, |n, out| {
+            filtered(src, &dirs, n, |c| c.max(0.0) as f32 as f64, out)
+        })
     });
     let specular = shininess
         .iter()
         .map(|&s| {
-            let m = CoeffMap::from_fn_groups(SPECULAR_ROWS, g, |r, out| {
-                filtered(
-                    src,
-                    &dirs,
-                    r,
-                    |c| if c > 0.0 { c.powf(s) } else { 0.0 },
-                    out,
-                )
+            let m = kept(Lobe::Specular(s.to_bits()), &|| {
+                CoeffMap::from_fn_groups(SPECULAR_ROWS, g, |r, out| {
+                    filtered(
+                        src,
+                        &dirs,
+                        r,
+                        |c| if c > 0.0 { c.powf(s) } else { 0.0 },
+                        out,
+                    )
+                })
             });
             (s, m)
         })

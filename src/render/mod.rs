@@ -41,6 +41,7 @@ pub mod env;
 pub mod gpu;
 pub mod image;
 pub mod own;
+mod prefiltered;
 pub mod prepare;
 pub mod presets;
 pub mod rows;
