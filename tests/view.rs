@@ -237,3 +237,47 @@ fn a_scripted_view_matches_the_render_command_it_prints() {
         w.height()
     );
 }
+
+/// Showing the controls never changes a setting: values outside a slider's range (a thin film,
+/// a dark exposure, a large zoom) reach the printed command as given.
+#[test]
+fn values_outside_the_sliders_ranges_are_kept() {
+    let Some(display) = display() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let script = dir.path().join("s.json");
+    std::fs::write(&script, r#"[{"frames": 2}, {"command": true}]"#).unwrap();
+    let out = Command::new(BIN)
+        .args([
+            "view", "--scene", "ball", "--size", "32x24", "--film", "2.7:50",
+        ])
+        .args([
+            "--exposure",
+            "-10",
+            "--kd",
+            "5",
+            "--zoom",
+            "20",
+            "--samples",
+            "500",
+        ])
+        .arg("--script")
+        .arg(&script)
+        .env("DISPLAY", &display.name)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let command = String::from_utf8_lossy(&out.stdout);
+    for kept in [
+        "--film 2.7:50",
+        "--exposure -10",
+        "--kd 5",
+        "--zoom 20",
+        "--samples 500",
+    ] {
+        assert!(command.contains(kept), "{kept} lost: {command}");
+    }
+}

@@ -69,6 +69,16 @@ impl UiState {
     }
 }
 
+/// A slider that keeps a value outside its range as it is (a film of 1200 nm, an exposure of
+/// -10 EV from the command line): only the user's own drags are held to the range, so that
+/// showing a control never changes the setting behind it.
+fn slider<'a, N: egui::emath::Numeric>(
+    value: &'a mut N,
+    range: std::ops::RangeInclusive<N>,
+) -> egui::Slider<'a> {
+    egui::Slider::new(value, range).clamping(egui::SliderClamping::Edits)
+}
+
 fn film_text(layers: &[(String, f64)]) -> Option<String> {
     (!layers.is_empty()).then(|| {
         layers
@@ -120,11 +130,7 @@ fn number(
     log: bool,
 ) {
     let mut v = value;
-    let r = ui.add(
-        egui::Slider::new(&mut v, range)
-            .text(label)
-            .logarithmic(log),
-    );
+    let r = ui.add(slider(&mut v, range).text(label).logarithmic(log));
     if r.changed() {
         app.change(&[(key, Some(format!("{}", (v * 1e4).round() / 1e4)))]);
     }
@@ -169,9 +175,7 @@ fn controls(app: &mut App, ui: &mut egui::Ui) {
             ui.label(format!("{}", i + 1));
             let r = ui.add(egui::TextEdit::singleline(n).desired_width(44.0));
             edited |= r.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
-            edited |= ui
-                .add(egui::Slider::new(d, 0.0..=1000.0).suffix(" nm"))
-                .changed();
+            edited |= ui.add(slider(d, 0.0..=1000.0).suffix(" nm")).changed();
             if ui.small_button("x").clicked() {
                 remove = Some(i);
             }
@@ -188,9 +192,7 @@ fn controls(app: &mut App, ui: &mut egui::Ui) {
         }
         if let Some((_, d)) = layers.first_mut() {
             // The paper's sweep: the first layer from 100 to 400 nm.
-            edited |= ui
-                .add(egui::Slider::new(d, 100.0..=400.0).text("sweep"))
-                .changed();
+            edited |= ui.add(slider(d, 100.0..=400.0).text("sweep")).changed();
         }
     });
     app.ui.layers = layers.clone();
@@ -216,10 +218,10 @@ fn controls(app: &mut App, ui: &mut egui::Ui) {
     ui.heading("Camera");
     let [mut yaw, mut pitch] = app.ui.orbit;
     let c1 = ui
-        .add(egui::Slider::new(&mut yaw, -180.0..=180.0).text("yaw"))
+        .add(slider(&mut yaw, -180.0..=180.0).text("yaw"))
         .changed();
     let c2 = ui
-        .add(egui::Slider::new(&mut pitch, -90.0..=90.0).text("pitch"))
+        .add(slider(&mut pitch, -90.0..=90.0).text("pitch"))
         .changed();
     if c1 || c2 {
         app.change(&[("orbit", Some(format!("{:.1},{:.1}", yaw, pitch)))]);
@@ -229,7 +231,7 @@ fn controls(app: &mut App, ui: &mut egui::Ui) {
     let ev = app.args.exposure;
     let mut e = ev;
     if ui
-        .add(egui::Slider::new(&mut e, -8.0..=8.0).text("exposure EV"))
+        .add(slider(&mut e, -8.0..=8.0).text("exposure EV"))
         .changed()
     {
         app.change(&[("exposure", Some(format!("{:.2}", e)))]);
@@ -308,11 +310,7 @@ fn wavelengths(app: &mut App, ui: &mut egui::Ui) {
     let (mut n, mut t, mut b) = (u.samples, u.tolerance, u.budget);
     match mode {
         "uniform" => {
-            let r = ui.add(
-                egui::Slider::new(&mut n, 2..=401)
-                    .text("N")
-                    .logarithmic(true),
-            );
+            let r = ui.add(slider(&mut n, 2..=401).text("N").logarithmic(true));
             if r.drag_stopped() || (r.changed() && !r.dragged()) {
                 app.ui.samples = n;
                 set(app, vec![("samples", n.to_string())]);
@@ -322,13 +320,13 @@ fn wavelengths(app: &mut App, ui: &mut egui::Ui) {
         }
         "fitted" | "budget" => {
             let r1 = ui.add(
-                egui::Slider::new(&mut t, 0.05..=5.0)
+                slider(&mut t, 0.05..=5.0)
                     .text("tolerance ΔE")
                     .logarithmic(true),
             );
             let mut r2 = None;
             if mode == "budget" {
-                r2 = Some(ui.add(egui::Slider::new(&mut b, 1..=32).text("max nodes")));
+                r2 = Some(ui.add(slider(&mut b, 1..=32).text("max nodes")));
             }
             app.ui.tolerance = t;
             app.ui.budget = b;
