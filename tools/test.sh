@@ -35,31 +35,25 @@ if ! dpkg -s mesa-vulkan-drivers libvulkan1 >/dev/null 2>&1; then
     exit 1
   fi
 fi
-step "GNU parallel for the batch shard test (Debian package parallel)"
-# tests/batch.rs runs two shards of one batch at once under GNU parallel, as the README's recipe.
-if ! command -v parallel >/dev/null 2>&1; then
+# Installs Debian package $2 unless command $1 is on the PATH (root; else says so and stops).
+need_command() {
+  if command -v "$1" >/dev/null 2>&1; then return; fi
   if [ "$(id -u)" = 0 ]; then
     export DEBIAN_FRONTEND=noninteractive
-    apt-get install -y -qq parallel >/dev/null 2>&1 \
-      || { apt-get update -qq && apt-get install -y -qq parallel >/dev/null; }
+    apt-get install -y -qq "$2" >/dev/null 2>&1 \
+      || { apt-get update -qq && apt-get install -y -qq "$2" >/dev/null; }
   else
-    echo "GNU parallel missing and not root: install the Debian package parallel" >&2
+    echo "$1 missing and not root: install the Debian package $2" >&2
     exit 1
   fi
-fi
+}
+step "GNU parallel for the batch shard test (Debian package parallel)"
+# tests/batch.rs runs two shards of one batch at once under GNU parallel, as the README's recipe.
+need_command parallel parallel
 step "Xvfb for the view's window tests (Debian package xvfb)"
 # tests/view.rs opens \`specmap view\` in a real window on a private Xvfb display (lavapipe
 # draws it); a missing Xvfb fails the suite, as a missing GPU adapter does.
-if ! command -v Xvfb >/dev/null 2>&1; then
-  if [ "$(id -u)" = 0 ]; then
-    export DEBIAN_FRONTEND=noninteractive
-    apt-get install -y -qq xvfb >/dev/null 2>&1 \
-      || { apt-get update -qq && apt-get install -y -qq xvfb >/dev/null; }
-  else
-    echo "Xvfb missing and not root: install the Debian package xvfb" >&2
-    exit 1
-  fi
-fi
+need_command Xvfb xvfb
 step "LLVM for Mitsuba's llvm_ad_spectral variant (Debian package libllvm19)"
 # tests/interop/test_mitsuba.py runs the specmap_envmap emitter in llvm_ad_spectral too; Dr.Jit
 # crashes with the stock LLVM 15, so it is pointed at LLVM 19 (the test skips without one).

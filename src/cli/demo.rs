@@ -692,7 +692,7 @@ fn tradeoff_table(sizes: &Sizes) -> anyhow::Result<Vec<TradeoffRow>> {
 }
 
 /// A word for a POSIX shell: as is when it is plain, else single-quoted.
-pub(super) fn sh(s: &str) -> String {
+pub(crate) fn sh(s: &str) -> String {
     let plain = !s.is_empty()
         && s.chars()
             .all(|c| c.is_ascii_alphanumeric() || "_-./:=,+@%".contains(c));

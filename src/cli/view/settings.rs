@@ -2,6 +2,7 @@
 //! change goes through `render`'s own parser, so the window accepts exactly what `render`
 //! accepts and what it shows is one `specmap render` command away.
 
+use crate::cli::demo::sh;
 use crate::cli::render::RenderArgs;
 
 /// Options that only `render`'s still output or report use: never part of what is shown.
@@ -86,27 +87,15 @@ impl Settings {
                 continue;
             }
             words.push(format!("--{k}"));
-            words.push(quote(v));
+            words.push(sh(v));
         }
         if let Some(r) = fit_range {
             words.push("--fit-range".into());
             words.push(r);
         }
         words.push("-o".into());
-        words.push(quote(output));
+        words.push(sh(output));
         words.join(" ")
-    }
-}
-
-/// `v` as one shell word.
-fn quote(v: &str) -> String {
-    let plain = !v.is_empty()
-        && v.chars()
-            .all(|c| c.is_ascii_alphanumeric() || "-_.,:/+=@%".contains(c));
-    if plain {
-        v.to_string()
-    } else {
-        format!("'{}'", v.replace('\'', r"'\''"))
     }
 }
 
