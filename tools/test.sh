@@ -76,6 +76,10 @@ export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp/specmap-xdg-$(id -u)}"
 mkdir -p "$XDG_RUNTIME_DIR" && chmod 700 "$XDG_RUNTIME_DIR"
 # The GPU tests must run here, not skip: a missing adapter is a failure in this suite.
 export SPECMAP_REQUIRE_GPU=1
+# The suite's fits are stored in a cache of its own, made fresh each run: never in the user's,
+# and never one a run before it filled.
+export XDG_CACHE_HOME="$(mktemp -d "${TMPDIR:-/tmp}/specmap-test-cache.XXXXXX")"
+trap 'rm -rf "$XDG_CACHE_HOME"' EXIT
 
 step "Python venv for the interop tests (.venv)"
 if ! .venv/bin/python -c "import colour, tmm, OpenEXR, pytest, scipy, mitsuba" 2>/dev/null \

@@ -1,7 +1,8 @@
 //! `specmap color`: the colour of a light, or of a reflectance under a light.
 
 use super::outln;
-use super::render::{tolerance_options, QuadratureArg};
+use super::render::QuadratureArg;
+use super::tolerance::tolerance_options;
 use super::SpaceArg;
 use clap::Args;
 use specmap::colorimetry::{cct, srgb8, Cmfs, Lab, Observer, RgbSpace, Xyz, D65_XY};
@@ -136,7 +137,7 @@ pub fn run(a: ColorArgs) -> anyhow::Result<()> {
         super::write_grid_choice(&mut out, c);
     }
     if let Some(s) = &selection {
-        super::render::write_selection(&mut out, s);
+        super::tolerance::write_selection(&mut out, s, false);
     }
     super::write_xyz(&mut out, xyz);
     match temperature.kelvin {

@@ -14,6 +14,7 @@ mod rendition;
 mod roundtrip;
 pub mod runtime_dir;
 mod thinfilm;
+mod tolerance;
 mod view;
 
 /// `writeln!` into a String (infallible).

@@ -6,15 +6,11 @@ use super::{ObserverArg, RuleArg};
 use anyhow::Context;
 use clap::{Args, ValueEnum};
 use specmap::colorimetry::RgbSpace;
-use specmap::quadrature::choose::{Family, Selection};
-use specmap::quadrature::fit::Options;
-use specmap::quadrature::Quadrature;
 use specmap::render::gpu::Gpu;
 use specmap::render::prepare::Prepared;
 use specmap::render::{cpu, env, sweep, Backend, Film, Preset, Scene, Spectral};
 use specmap::spectrum::Tabulated;
 use specmap::thinfilm::{Index, Layer, Material};
-use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -94,6 +90,16 @@ pub struct RenderArgs {
     /// wavelengths; the view's default is 0.15).
     #[arg(long, value_name = "F|S0:S1", requires = "tolerance")]
     pub(crate) fit_range: Option<String>,
+    /// With --tolerance: the most seconds the scene's fit may search (it returns the best
+    /// wavelengths found by then). By default a tenth of the time the uniform grid that meets
+    /// the tolerance would take for every frame, so that a fit which does not pay costs at most
+    /// 10% more; where even that cannot pay, no fit runs. --quadrature scene: no limit.
+    #[arg(long, value_name = "SECONDS", requires = "tolerance")]
+    pub(crate) fit_budget: Option<f64>,
+    /// Neither read nor store the chosen wavelengths in the cache
+    /// ($XDG_CACHE_HOME/specmap/quadrature, else ~/.cache/specmap/quadrature).
+    #[arg(long)]
+    pub(crate) no_cache: bool,
     /// Which wavelengths and weights: `scene` fits them to the scene (needs --tolerance, and is
     /// its default), `uniform` is the --step/--samples grid (or, with --tolerance, the coarsest
     /// step at its best rule), `meyer` is Meyer's four-wavelength Gaussian quadrature.
@@ -246,6 +252,9 @@ fn diffuse(spec: &str) -> anyhow::Result<Tabulated> {
     Ok(specmap::data::spectrum(spec)?.data)
 }
 
+/// The options that take no value ([`RenderArgs::to_pairs`] gives them an empty one).
+pub(crate) const FLAGS: [&str; 2] = ["no-cache", "json"];
+
 /// `RenderArgs` parsed alone (for [`RenderArgs::parse_pairs`]).
 #[derive(Debug, clap::Parser)]
 #[command(name = "specmap render")]
@@ -292,6 +301,8 @@ impl RenderArgs {
         opt("tolerance", num(self.tolerance));
         opt("max-nodes", self.max_nodes.map(|v| v.to_string()));
         opt("fit-range", self.fit_range.clone());
+        opt("fit-budget", num(self.fit_budget));
+        opt("no-cache", self.no_cache.then(String::new));
         opt("quadrature", self.quadrature.map(|q| name(&q)));
         opt(
             "rule",
@@ -322,7 +333,10 @@ impl RenderArgs {
     ) -> anyhow::Result<RenderArgs> {
         let mut argv = vec!["specmap render".to_string()];
         for (k, v) in pairs {
-            argv.push(format!("--{k}={v}"));
+            argv.push(match FLAGS.contains(&k) {
+                true => format!("--{k}"),
+                false => format!("--{k}={v}"),
+            });
         }
         let r = <RenderOnly as clap::Parser>::try_parse_from(&argv).map_err(|e| {
             let text = e.to_string();
@@ -396,15 +410,6 @@ pub fn run(a: RenderArgs) -> anyhow::Result<()> {
     let (lighting, env_report) = load_env(&a)?.unzip();
     let scene = scene_from(&a, preset, (w, h), lighting)?;
     let spectral = spectral_of(&a)?;
-    let aim = a.tolerance.map(|t| (t, a.max_nodes));
-    let (quadrature, selection) = match a.fit_range.as_deref().map(fit_range).transpose()? {
-        Some(scales) => {
-            let mut fit_scene = scene.clone();
-            fit_scene.for_any_view(scales);
-            quadrature_for(&fit_scene, &spectral, a.quadrature, aim)?
-        }
-        None => quadrature_for(&scene, &spectral, a.quadrature, aim)?,
-    };
     // The backend.
     let gpu = match a.backend {
         BackendArg::Cpu => None,
@@ -424,6 +429,20 @@ pub fn run(a: RenderArgs) -> anyhow::Result<()> {
     } else {
         Backend::Cpu
     };
+    let frames = 1;
+    let serving = super::tolerance::Serving {
+        gpu: gpu.as_ref(),
+        frames,
+    };
+    let chosen = match a.fit_range.as_deref().map(fit_range).transpose()? {
+        Some(scales) => {
+            let mut fit_scene = scene.clone();
+            fit_scene.for_any_view(scales);
+            super::tolerance::quadrature_for(&fit_scene, &spectral, &a, &serving)?
+        }
+        None => super::tolerance::quadrature_for(&scene, &spectral, &a, &serving)?,
+    };
+    let (quadrature, selection, plan) = (chosen.quadrature, chosen.selection, chosen.plan);
     let adapter = gpu.as_ref().map(|g| g.adapter());
 
     if let Some(counts) = &a.sweep {
@@ -505,6 +524,7 @@ pub fn run(a: RenderArgs) -> anyhow::Result<()> {
             "rule": uniform.map(|(_, r)| r),
             "quadrature": quadrature.summary(selection.as_ref().map(|s| s.estimate_de2000)),
             "quadrature_choice": selection,
+            "quadrature_plan": plan,
             "light": scene.lightings.iter().map(|l| l.label.clone()).collect::<Vec<_>>(),
             "env": env_report,
             "prepare_s": prepare_s,
@@ -528,8 +548,14 @@ pub fn run(a: RenderArgs) -> anyhow::Result<()> {
             .map(|a| format!(" ({}, {})", a.name, a.backend))
             .unwrap_or_default()
     );
+    if let Some(p) = &plan {
+        super::tolerance::write_plan(&mut out, p);
+    }
     if let Some(c) = &selection {
-        write_selection(&mut out, c);
+        let cached = plan
+            .as_ref()
+            .is_some_and(|p| p.source == specmap::render::plan::Source::Cache);
+        super::tolerance::write_selection(&mut out, c, cached);
     }
     if let Some(r) = &env_report {
         outln!(
@@ -708,135 +734,4 @@ pub(crate) fn spectral_of(a: &RenderArgs) -> anyhow::Result<Spectral> {
         space: RgbSpace::SRGB,
         ..base
     })
-}
-
-/// The quadrature of `--quadrature`, `--tolerance` (and `--max-nodes`), `--step`/`--samples`
-/// and `--rule`, and what `--tolerance` chose.
-fn quadrature_for(
-    scene: &Scene,
-    spectral: &Spectral,
-    kind: Option<QuadratureArg>,
-    aim: Option<(f64, Option<usize>)>,
-) -> anyhow::Result<(Quadrature, Option<Selection>)> {
-    let uniform = || Quadrature::uniform(spectral.grid, spectral.rule, spectral.observer);
-    let Some((tolerance, budget)) = aim else {
-        return Ok(match kind {
-            Some(QuadratureArg::Scene) => anyhow::bail!(
-                "--quadrature scene fits the wavelengths to a colour tolerance: give --tolerance \
-                 (e.g. --tolerance 0.5)"
-            ),
-            Some(QuadratureArg::Meyer) => (Quadrature::meyer(spectral.observer)?, None),
-            Some(QuadratureArg::Uniform) | None => (uniform()?, None),
-        });
-    };
-    let opts = tolerance_options(tolerance, budget, kind)?;
-    let family = match kind {
-        Some(QuadratureArg::Uniform) => Family::Uniform,
-        Some(QuadratureArg::Meyer) => anyhow::bail!(
-            "--quadrature meyer has four fixed wavelengths: it cannot follow --tolerance"
-        ),
-        Some(QuadratureArg::Scene) | None => Family::Scene,
-    };
-    // A scene's fit takes seconds (half a minute for the cylinders, minutes for a thickness
-    // ramp under a photograph): say what is happening, stage by stage.
-    let doing = match budget {
-        Some(n) => format!("at most {n} wavelengths for CIEDE2000 {tolerance}"),
-        None => format!("wavelengths for CIEDE2000 {tolerance}"),
-    };
-    let spinner = std::io::stderr().is_terminal().then(|| {
-        let b = indicatif::ProgressBar::new_spinner();
-        if let Ok(style) = indicatif::ProgressStyle::with_template("{spinner} {msg} [{elapsed}]") {
-            b.set_style(style);
-        }
-        b.set_message(doing.clone());
-        b.enable_steady_tick(std::time::Duration::from_millis(120));
-        b
-    });
-    let report = |stage: &specmap::quadrature::progress::Stage| {
-        if let Some(b) = &spinner {
-            b.set_message(format!("{doing}: {stage}"));
-        }
-    };
-    let s = scene.choose_quadrature_reporting(
-        spectral.observer,
-        spectral.space,
-        family,
-        &opts,
-        &report,
-    );
-    if let Some(b) = spinner {
-        b.finish_and_clear();
-    }
-    let s = s?;
-    Ok((s.quadrature.clone(), Some(s)))
-}
-
-/// The fit's options for `--tolerance` and `--max-nodes`: a budget bounds the scene's
-/// quadrature, not a uniform grid (whose count `--samples` sets).
-pub(crate) fn tolerance_options(
-    tolerance: f64,
-    budget: Option<usize>,
-    kind: Option<QuadratureArg>,
-) -> anyhow::Result<Options> {
-    Ok(match budget {
-        None => Options::new(tolerance)?,
-        Some(0) => anyhow::bail!("--max-nodes 0: a quadrature needs at least 1 wavelength"),
-        Some(_) if kind == Some(QuadratureArg::Uniform) => anyhow::bail!(
-            "--max-nodes bounds the scene's quadrature, not --quadrature uniform (a uniform \
-             grid of N wavelengths is --samples N, without --tolerance)"
-        ),
-        Some(n) => Options::with_budget(tolerance, n)?,
-    })
-}
-
-/// Appends what `--tolerance` chose, and why.
-pub(crate) fn write_selection(out: &mut String, s: &Selection) {
-    outln!(
-        out,
-        "  quadrature   {}: estimate {:.3} {} target {:.3} (tolerance {} x margin {:.2}{}); {}",
-        s.kind,
-        s.estimate_de2000,
-        if s.met { "<=" } else { "MISSES the" },
-        s.target_de2000,
-        s.tolerance_de2000,
-        s.target_de2000 / s.tolerance_de2000,
-        s.budget
-            .map_or(String::new(), |b| format!(", at most {b} nodes")),
-        s.reason
-    );
-    if let Some(f) = &s.scene {
-        outln!(
-            out,
-            "               scene fit: {} stimuli fitted, {} held out (max {:.3}, mean {:.3}); \
-             nodes on lines at {:?} nm; largest error: {}",
-            f.stimuli,
-            f.held_out,
-            f.held_out_max,
-            f.held_out_mean,
-            f.lines_nm,
-            f.worst
-        );
-    }
-    if let Some(c) = &s.image {
-        outln!(
-            out,
-            "               image: max {:.3} (pixel {}, {}), mean {:.3} against the 1 nm render, \
-             on {}",
-            c.max_de2000,
-            c.max_at[0],
-            c.max_at[1],
-            c.mean_de2000,
-            c.lattice()
-        );
-    }
-    let u = &s.uniform;
-    outln!(
-        out,
-        "               uniform: {} {} ({} wavelengths), estimate {:.3}{}",
-        u.grid,
-        u.rule,
-        u.samples,
-        u.estimate_de2000,
-        if u.met { "" } else { " (misses the target)" }
-    );
 }

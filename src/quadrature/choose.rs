@@ -11,7 +11,7 @@ use crate::spectrum::{Rule, WavelengthGrid};
 use crate::tradeoff::{Stimulus, STEPS_NM};
 
 /// Which quadratures to choose among.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Family {
     /// The scene's fitted quadrature, or a uniform grid where that is cheaper or the fit fails.
@@ -21,7 +21,7 @@ pub enum Family {
 }
 
 /// One uniform grid and rule tried.
-#[derive(Debug, Clone, Copy, serde::Serialize)]
+#[derive(Debug, Clone, Copy, serde::Serialize, serde::Deserialize)]
 pub struct UniformTried {
     pub step_nm: f64,
     pub samples: usize,
@@ -31,9 +31,8 @@ pub struct UniformTried {
 }
 
 /// The cheapest uniform grid that meets the target.
-#[derive(Debug, Clone, serde::Serialize)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct UniformChoice {
-    #[serde(skip)]
     pub quadrature: Quadrature,
     pub grid: String,
     pub rule: Rule,
@@ -56,9 +55,8 @@ pub struct Scene<'a> {
 }
 
 /// What `--tolerance` chose.
-#[derive(Debug, Clone, serde::Serialize)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct Selection {
-    #[serde(skip)]
     pub quadrature: Quadrature,
     pub kind: Kind,
     pub family: Family,
@@ -78,11 +76,14 @@ pub struct Selection {
     /// The quadrature against the 1 nm render on the image's own pixels, where the caller
     /// renders one and checked it (`render --tolerance` with a scene quadrature).
     pub image: Option<ImageCheck>,
+    /// Seconds the choice took, and where they went (a scene's choice fills them).
+    pub seconds: f64,
+    pub stages: Vec<super::progress::StageTime>,
 }
 
 /// A quadrature's render against the 1 nm Simpson render of the same image, on a lattice of
 /// its pixels (every `stride`-th row and column, each block's centre).
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ImageCheck {
     pub max_de2000: f64,
     pub mean_de2000: f64,
@@ -206,6 +207,9 @@ pub fn select_reporting(
     } else {
         Some(est(scene.held_out)?)
     };
+    report(&super::progress::Stage::UniformGrids {
+        stimuli: scene.fit.len() + scene.held_out.len(),
+    });
     let uniform = cheapest_uniform(&fit_set, held.as_ref(), opts.target())?;
     let fitted = match family {
         Family::Scene => Some(fit::fit_reporting(&fit_set, held.as_ref(), opts, report)?),
@@ -279,6 +283,8 @@ pub fn select_reporting(
         scene: fitted,
         uniform,
         image: None,
+        seconds: 0.0,
+        stages: Vec::new(),
     })
 }
 
@@ -342,6 +348,32 @@ pub fn smooth_reflectances(
     Ok(out)
 }
 
+/// `color colorchecker:red --under FL2 --tolerance`'s stimuli: fitted, and held out.
+#[cfg(test)]
+pub(crate) fn red_under_fl2() -> (Vec<Stimulus>, Vec<Stimulus>) {
+    let fl2 = crate::data::spectrum("FL2").unwrap().data;
+    let red = crate::data::spectrum("colorchecker:red").unwrap().data;
+    let colour = Stimulus::new(
+        "red under FL2",
+        fl2,
+        crate::tradeoff::Surface::Reflectance(red),
+    );
+    for_colour(colour, "FL2").unwrap()
+}
+
+/// The scene of `fit` and `held_out` over 380-780 nm for CIE 1931, each relative to its light.
+#[cfg(test)]
+pub(crate) fn own_light<'a>(fit: &'a [Stimulus], held_out: &'a [Stimulus]) -> Scene<'a> {
+    Scene {
+        fit,
+        held_out,
+        observer: Observer::Cie1931,
+        start_nm: 380.0,
+        end_nm: 780.0,
+        white: White::OwnLight,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -350,22 +382,8 @@ mod tests {
     /// chosen: the scene's best within the budget is, and the choice says it misses.
     #[test]
     fn a_budget_keeps_the_choice_within_it() {
-        let fl2 = crate::data::spectrum("FL2").unwrap().data;
-        let red = crate::data::spectrum("colorchecker:red").unwrap().data;
-        let colour = Stimulus::new(
-            "red under FL2",
-            fl2,
-            crate::tradeoff::Surface::Reflectance(red),
-        );
-        let (fit, held_out) = for_colour(colour, "FL2").unwrap();
-        let scene = Scene {
-            fit: &fit,
-            held_out: &held_out,
-            observer: Observer::Cie1931,
-            start_nm: 380.0,
-            end_nm: 780.0,
-            white: White::OwnLight,
-        };
+        let (fit, held_out) = red_under_fl2();
+        let scene = own_light(&fit, &held_out);
         let free = select(&scene, Family::Scene, &Options::new(0.5).unwrap()).unwrap();
         let n = free.quadrature.len();
         assert!(free.met && free.kind == Kind::Scene && n > 3, "{free:?}");

@@ -63,6 +63,9 @@ pub struct Options {
     /// from fresh starts ([`within_budget`]), and where it misses the target the choice says by
     /// how much. A budget the fit does not need changes nothing.
     pub budget: Option<usize>,
+    /// When to stop searching (`--fit-budget`): the fit is an anytime search, and returns the
+    /// best quadrature found by then ([`Choice::cut_short`] says it was stopped).
+    pub deadline: Option<std::time::Instant>,
 }
 
 impl Options {
@@ -74,6 +77,7 @@ impl Options {
             margin: 0.8,
             max_nodes: 40,
             budget: None,
+            deadline: None,
         })
     }
     /// The defaults with at most `nodes` nodes (see [`Options::budget`]).
@@ -90,6 +94,19 @@ impl Options {
     }
     pub fn target(&self) -> f64 {
         self.margin * self.tolerance
+    }
+    /// These options with a deadline `seconds` from now (None: no deadline).
+    pub fn within_seconds(self, seconds: Option<f64>) -> Options {
+        let deadline = seconds.map(|s| {
+            let s = std::time::Duration::from_secs_f64(s.clamp(0.0, 1e9));
+            std::time::Instant::now() + s
+        });
+        Options { deadline, ..self }
+    }
+    /// Whether the deadline has passed.
+    pub fn out_of_time(&self) -> bool {
+        self.deadline
+            .is_some_and(|d| std::time::Instant::now() >= d)
     }
     /// Whether a quadrature of `nodes` nodes is within the budget.
     pub fn within_budget(&self, nodes: usize) -> bool {
@@ -110,7 +127,7 @@ pub fn check_tolerance(tolerance: f64) -> Result<()> {
 }
 
 /// One node count tried.
-#[derive(Debug, Clone, Copy, serde::Serialize)]
+#[derive(Debug, Clone, Copy, serde::Serialize, serde::Deserialize)]
 pub struct Tried {
     pub nodes: usize,
     #[serde(rename = "fit_max_dE2000")]
@@ -120,9 +137,8 @@ pub struct Tried {
 }
 
 /// What the fit chose, and why.
-#[derive(Debug, Clone, serde::Serialize)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct Choice {
-    #[serde(skip)]
     pub quadrature: Quadrature,
     pub tolerance_de2000: f64,
     /// `margin * tolerance`, what the estimate had to meet.
@@ -138,6 +154,8 @@ pub struct Choice {
     /// The stimulus with the largest error.
     pub worst: String,
     pub met: bool,
+    /// The deadline stopped the search before it was done ([`Options::deadline`]).
+    pub cut_short: bool,
     /// The nodes put on emission lines.
     pub lines_nm: Vec<f64>,
     /// Node counts on the way, with their errors.
@@ -207,7 +225,8 @@ pub fn fit_reporting(
             "the held-out stimuli are on another grid or for another observer",
         ));
     }
-    let p = Problem::new(train)?;
+    let mut p = Problem::new(train)?;
+    p.deadline = opts.deadline;
     let mut line_nodes = lines(train);
     line_nodes.truncate(opts.max_nodes);
     let target = opts.target();
@@ -226,6 +245,7 @@ pub fn fit_reporting(
     let best = reweigh(&p, held_out, best)?;
     let mut choice = best.into_choice(train, held_out, opts, &line_nodes);
     choice.tried = greedy.tried;
+    choice.cut_short = p.out_of_time();
     Ok(choice)
 }
 
@@ -277,7 +297,7 @@ fn greedy(
                 since_best += 1;
             }
             // More nodes that fit better but not the held-out set: the fit set is exhausted.
-            if done || since_best >= PATIENCE {
+            if done || since_best >= PATIENCE || p.out_of_time() {
                 break;
             }
         }
@@ -439,6 +459,7 @@ impl Candidate {
             held_out_mean: hmean,
             worst,
             met: self.max() <= opts.target(),
+            cut_short: false,
             lines_nm: lines.iter().map(|&j| train.grid.wavelength_nm(j)).collect(),
             tried: Vec::new(),
             stimuli: train.len(),
@@ -621,7 +642,7 @@ fn prune(
     fixed: &[usize],
     report: Report,
 ) -> Result<Candidate> {
-    'rounds: while best.cols.len() > 1 {
+    'rounds: while best.cols.len() > 1 && !p.out_of_time() {
         report(&Stage::Pruning {
             nodes: best.cols.len(),
             max: best.max(),
@@ -739,7 +760,7 @@ fn reseed(
     fixed: &[usize],
     report: Report,
 ) -> Result<Candidate> {
-    while best.cols.len() > fixed.len() + 2 {
+    while best.cols.len() > fixed.len() + 2 && !p.out_of_time() {
         let count = best.cols.len() - 1;
         let reach = SEED_REACH * target;
         match best_of_seeds(p, held_out, count, fixed, reach, Some(&best), report)? {
@@ -781,6 +802,9 @@ fn best_of_seeds(
     let mut found: Option<Candidate> = None;
     let of = judged.len().min(SEEDS_DESCENDED);
     for (k, seed) in judged.into_iter().take(SEEDS_DESCENDED).enumerate() {
+        if p.out_of_time() {
+            break;
+        }
         let stage = |search| Stage::Reseeding {
             nodes: seed.cols.len(),
             seed: k + 1,
@@ -824,6 +848,9 @@ fn exchange(
     for _ in 0..6 {
         let mut improved = false;
         for i in 0..best.cols.len() {
+            if p.out_of_time() {
+                return Ok(best);
+            }
             let at = best.cols[i];
             if fixed.contains(&at) {
                 continue;
@@ -904,7 +931,7 @@ fn descend(
         // rest of the round would try each in the same state again and move none.
         let mut unmoved = 0;
         for k in 0..12 * n {
-            if unmoved >= n {
+            if unmoved >= n || p.out_of_time() {
                 break;
             }
             let i = k % n;

@@ -55,6 +55,8 @@ pub(crate) struct Problem<'a> {
     gram: [(DMatrix<f64>, DVector<f64>); 3],
     /// The rows' values and lights by wavelength ([`Columns`]).
     columns: Columns,
+    /// When the fit must stop searching ([`super::fit::Options::deadline`]).
+    pub(super) deadline: Option<std::time::Instant>,
 }
 
 /// The rows' values and lights laid out by 1 nm wavelength: `values[j][r]` is row `r` at
@@ -136,7 +138,14 @@ impl<'a> Problem<'a> {
             cmf: reference.weights().to_vec(),
             gram,
             columns,
+            deadline: None,
         })
+    }
+
+    /// Whether the fit's deadline has passed: the search stops and keeps the best it found.
+    pub(super) fn out_of_time(&self) -> bool {
+        self.deadline
+            .is_some_and(|d| std::time::Instant::now() >= d)
     }
 
     /// Every row's `which` spectrum at the nodes `cols`: a rows x nodes matrix.

@@ -12,6 +12,7 @@
 //! divides by the light's own `sum_i w_y,i L(lambda_i)`, so a perfect white has Y = 100 on every
 //! quadrature.
 
+pub mod cache;
 pub mod choose;
 pub mod estimate;
 pub mod fit;
@@ -26,7 +27,7 @@ use crate::spectrum::{Rule, WavelengthGrid};
 use std::fmt;
 
 /// Where a quadrature came from.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Kind {
     /// A uniform grid and an integration rule.
@@ -47,8 +48,11 @@ impl fmt::Display for Kind {
     }
 }
 
-/// Nodes in nm (strictly increasing) and a weight triple per node.
-#[derive(Debug, Clone, PartialEq)]
+/// Nodes in nm (strictly increasing) and a weight triple per node. Stored (in a cache entry,
+/// say) as a [`Record`]; read back, it is checked as [`Quadrature::new`] checks, and a uniform
+/// one is made again from its grid and rule.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(try_from = "Record", into = "Record")]
 pub struct Quadrature {
     kind: Kind,
     observer: Observer,
@@ -233,6 +237,52 @@ impl fmt::Display for Quadrature {
     }
 }
 
+/// A quadrature as it is stored.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+pub struct Record {
+    pub kind: Kind,
+    pub observer: Observer,
+    pub nodes_nm: Vec<f64>,
+    pub weights: Vec<[f64; 3]>,
+    /// The grid and rule of a uniform quadrature.
+    pub grid: Option<String>,
+    pub rule: Option<Rule>,
+}
+
+impl From<Quadrature> for Record {
+    fn from(q: Quadrature) -> Record {
+        Record {
+            kind: q.kind,
+            observer: q.observer,
+            grid: q.uniform.map(|(g, _)| g.to_string()),
+            rule: q.uniform.map(|(_, r)| r),
+            nodes_nm: q.nodes_nm,
+            weights: q.weights,
+        }
+    }
+}
+
+impl TryFrom<Record> for Quadrature {
+    type Error = Error;
+    fn try_from(r: Record) -> Result<Quadrature> {
+        match (r.kind, &r.grid, r.rule) {
+            (Kind::Uniform, Some(g), Some(rule)) => {
+                let q = Quadrature::uniform(g.parse()?, rule, r.observer)?;
+                if q.nodes_nm != r.nodes_nm {
+                    return Err(Error::invalid(format!(
+                        "a stored uniform quadrature on {g} lists other wavelengths"
+                    )));
+                }
+                Ok(q)
+            }
+            (Kind::Uniform, _, _) => Err(Error::invalid(
+                "a stored uniform quadrature needs its grid and rule",
+            )),
+            (kind, _, _) => Quadrature::new(kind, r.observer, r.nodes_nm, r.weights),
+        }
+    }
+}
+
 /// A quadrature as `--json` reports it.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct Summary {
@@ -282,6 +332,23 @@ mod tests {
         assert!((q.sum()[1] - 106.86).abs() < 0.05, "{}", q.sum()[1]);
         assert_eq!(q.weights()[0][1], 2.5 * cmfs.y.values()[0]);
         assert_eq!(q.describe(), "380:780:5 trapezoid");
+    }
+
+    #[test]
+    fn a_quadrature_reads_back_as_it_was_stored_and_is_checked() {
+        let grid = WavelengthGrid::new(380.0, 780.0, 10.0).unwrap();
+        let u = Quadrature::uniform(grid, Rule::Simpson, Observer::Cie1964).unwrap();
+        let m = Quadrature::meyer(Observer::Cie1931).unwrap();
+        for q in [u, m] {
+            let text = serde_json::to_string(&q).unwrap();
+            let back: Quadrature = serde_json::from_str(&text).unwrap();
+            assert_eq!(back, q);
+        }
+        // A stored quadrature that Quadrature::new would refuse is refused.
+        let bad = r#"{"kind":"scene","observer":"cie1931","nodes_nm":[600.0,500.0],
+            "weights":[[1,1,1],[1,1,1]],"grid":null,"rule":null}"#;
+        let e = serde_json::from_str::<Quadrature>(bad).unwrap_err();
+        assert!(e.to_string().contains("increase strictly"), "{e}");
     }
 
     #[test]

@@ -1,11 +1,18 @@
 //! Where a scene fit is: the stages of [`super::fit`] as values a caller can show while it
-//! waits (a fit over a thickness ramp under a photograph takes minutes).
+//! waits (a fit over a thickness ramp under a photograph takes minutes), and what each stage
+//! cost ([`Timings`]).
 
+use std::cell::RefCell;
 use std::fmt;
+use std::time::Instant;
 
 /// A stage of the fit as it starts.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Stage {
+    /// The scene's spectra (its stimuli) are being gathered, for round `round`.
+    Stimuli { round: usize },
+    /// The uniform grids are being judged on `stimuli` stimuli.
+    UniformGrids { stimuli: usize },
     /// The greedy stage has `nodes` nodes, whose largest error is `max`.
     Greedy { nodes: usize, max: f64 },
     /// Pruning, at `nodes` nodes whose largest error is `max`.
@@ -42,9 +49,33 @@ pub enum Stage {
     },
 }
 
+impl Stage {
+    /// The stage's kind, as [`Timings`] adds it up: "stimuli", "uniform grids", "greedy",
+    /// "pruning", "exchange", "descent", "reweighing", "texels", "image".
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Stage::Stimuli { .. } => "stimuli",
+            Stage::UniformGrids { .. } => "uniform grids",
+            Stage::Greedy { .. } => "greedy",
+            Stage::Pruning { .. } => "pruning",
+            Stage::Reseeding { search, .. } => search,
+            Stage::Reweighing { .. } => "reweighing",
+            Stage::Texels { .. } => "texels",
+            Stage::Image { .. } | Stage::ImageMiss { .. } => "image",
+        }
+    }
+}
+
 impl fmt::Display for Stage {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
+            Stage::Stimuli { round: 0 } => write!(f, "gathering the scene's spectra"),
+            Stage::Stimuli { round } => {
+                write!(f, "gathering the scene's spectra, round {round}")
+            }
+            Stage::UniformGrids { stimuli } => {
+                write!(f, "judging the uniform grids on {stimuli} spectra")
+            }
             Stage::Greedy { nodes, max } => {
                 write!(f, "adding nodes: {nodes} (largest error {max:.3})")
             }
@@ -98,9 +129,85 @@ pub type Report<'a> = &'a dyn Fn(&Stage);
 /// A sink that ignores every stage.
 pub fn quiet(_: &Stage) {}
 
+/// Seconds spent in one kind of stage ([`Stage::kind`]).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct StageTime {
+    pub stage: String,
+    pub seconds: f64,
+}
+
+/// Where a fit's time went: each stage runs from its report to the next one's, and the time of
+/// each kind of stage is added up, in the order the kinds first ran.
+pub struct Timings {
+    open: RefCell<Option<(&'static str, Instant)>>,
+    spent: RefCell<Vec<StageTime>>,
+}
+
+impl Default for Timings {
+    fn default() -> Self {
+        Timings::new()
+    }
+}
+
+impl Timings {
+    pub fn new() -> Timings {
+        Timings {
+            open: RefCell::new(None),
+            spent: RefCell::new(Vec::new()),
+        }
+    }
+
+    /// `stage` starts now: the stage before it ends.
+    pub fn mark(&self, stage: &Stage) {
+        self.close();
+        *self.open.borrow_mut() = Some((stage.kind(), Instant::now()));
+    }
+
+    fn close(&self) {
+        if let Some((kind, t)) = self.open.borrow_mut().take() {
+            let seconds = t.elapsed().as_secs_f64();
+            let mut spent = self.spent.borrow_mut();
+            match spent.iter_mut().find(|s| s.stage == kind) {
+                Some(s) => s.seconds += seconds,
+                None => spent.push(StageTime {
+                    stage: kind.to_string(),
+                    seconds,
+                }),
+            }
+        }
+    }
+
+    /// The open stage ends now; the seconds of each kind.
+    pub fn finish(&self) -> Vec<StageTime> {
+        self.close();
+        self.spent.borrow().clone()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn timings_add_up_each_kind_of_stage() {
+        let t = Timings::new();
+        let greedy = Stage::Greedy { nodes: 4, max: 1.0 };
+        t.mark(&Stage::Stimuli { round: 0 });
+        std::thread::sleep(std::time::Duration::from_millis(20));
+        t.mark(&greedy);
+        std::thread::sleep(std::time::Duration::from_millis(10));
+        t.mark(&Stage::Stimuli { round: 1 });
+        t.mark(&greedy);
+        let spent = t.finish();
+        let kinds: Vec<&str> = spent.iter().map(|s| s.stage.as_str()).collect();
+        assert_eq!(kinds, ["stimuli", "greedy"]);
+        assert!(
+            spent[0].seconds >= 0.02 && spent[1].seconds >= 0.01,
+            "{spent:?}"
+        );
+        // Finished: nothing is open, and a second finish adds nothing.
+        assert_eq!(t.finish(), spent);
+    }
 
     #[test]
     fn a_stage_reads_as_what_the_fit_is_doing() {

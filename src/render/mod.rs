@@ -38,9 +38,11 @@
 
 pub mod cpu;
 pub mod env;
+pub mod fingerprint;
 pub mod gpu;
 pub mod image;
 pub mod own;
+pub mod plan;
 mod prefiltered;
 pub mod prepare;
 pub mod presets;

@@ -114,7 +114,8 @@ def test_render_quadrature_integrates_the_ball_film_at_angles_it_did_not_fit(spe
     between the fitted ones, integrated with the render's quadrature, against colour-science at
     1 nm (CIELAB relative to the output white, as the render is compared)."""
     out = specmap("render", "--scene", "ball", "--size", "16x16", "--backend", "cpu",
-                  "--tolerance", str(TOL), "-o", str(tmp_path / "b.png"))
+                  "--tolerance", str(TOL), "--quadrature", "scene", "--no-cache",
+                  "-o", str(tmp_path / "b.png"))
     q = out["quadrature"]
     assert q["kind"] == "scene" and out["wavelengths"] == len(q["nodes_nm"]) <= 8
     assert out["quadrature_choice"]["met"] and q["estimate_de2000"] <= TOL

@@ -6,7 +6,8 @@
 //! at a time (a refit waits for the running fit, whose result is kept only if it still
 //! covers the settings).
 
-use crate::cli::render::{tolerance_options, QuadratureArg, RenderArgs};
+use crate::cli::render::{QuadratureArg, RenderArgs};
+use crate::cli::tolerance::tolerance_options;
 use specmap::quadrature::choose::{Family, Selection};
 use specmap::quadrature::Quadrature;
 use specmap::render::{Film, Scene};

@@ -87,7 +87,9 @@ impl Settings {
                 continue;
             }
             words.push(format!("--{k}"));
-            words.push(sh(v));
+            if !crate::cli::render::FLAGS.contains(&k.as_str()) {
+                words.push(sh(v));
+            }
         }
         if let Some(r) = fit_range {
             words.push("--fit-range".into());

@@ -16,7 +16,7 @@ use crate::error::Result;
 use crate::quadrature::choose::{self, Family, ImageCheck, Selection};
 use crate::quadrature::estimate::White;
 use crate::quadrature::fit::Options;
-use crate::quadrature::progress::{Report, Stage};
+use crate::quadrature::progress::{Report, Stage, Timings};
 use crate::quadrature::{nodes_verb, Kind};
 use crate::render::env::CoeffMap;
 use crate::render::{Environment, LightSpectra, Scene};
@@ -42,6 +42,27 @@ impl Scene {
 
     /// [`Scene::choose_quadrature`], telling `report` the scene fit's stages.
     pub fn choose_quadrature_reporting(
+        &self,
+        observer: Observer,
+        space: RgbSpace,
+        family: Family,
+        opts: &Options,
+        report: Report,
+    ) -> Result<Selection> {
+        let t0 = std::time::Instant::now();
+        let timings = Timings::new();
+        let report = &|s: &Stage| {
+            timings.mark(s);
+            report(s)
+        };
+        let mut s = self.choose(observer, space, family, opts, report)?;
+        s.stages = timings.finish();
+        s.seconds = t0.elapsed().as_secs_f64();
+        Ok(s)
+    }
+
+    /// [`Scene::choose_quadrature_reporting`] without the timing.
+    fn choose(
         &self,
         observer: Observer,
         space: RgbSpace,
@@ -129,7 +150,7 @@ impl Scene {
             // A fit that misses the target itself (nothing meets it and the scene fit errs
             // least, or a budget of nodes binds) would only miss a narrower one: neither texels
             // added nor a refit can help. Without a map, that is every miss.
-            if fitted > target || at_budget {
+            if fitted > target || at_budget || fit_opts.out_of_time() {
                 break;
             }
             if round < REFITS {
@@ -193,7 +214,10 @@ impl Scene {
         texels: &mut TexelChoice,
         own_map: bool,
     ) -> Result<Selection> {
+        let mut round = 0;
         loop {
+            (f.report)(&Stage::Stimuli { round });
+            round += 1;
             let s = self.stimuli_shown(texels, f.seen)?;
             let scene = choose::Scene {
                 fit: &s.fit,
@@ -210,7 +234,8 @@ impl Scene {
                 .opts
                 .budget
                 .is_some_and(|b| selection.quadrature.len() >= b);
-            if !(own_map && missed && !bound && texels.fitted < texels::MAX_FITTED) {
+            let more = texels.fitted < texels::MAX_FITTED && !f.opts.out_of_time();
+            if !(own_map && missed && !bound && more) {
                 return Ok(selection);
             }
             texels.fitted += texels::CHECKED / 2;

@@ -1,0 +1,280 @@
+//! `--tolerance` that pays for itself: the scene's fit is worth it only when it costs less
+//! than the wavelengths it saves on the frames it serves.
+//!
+//! The pipeline, each stage a value the report prints ([`Plan`]):
+//! 1. **cache**: a choice stored for this very scene and tolerance ([`crate::quadrature::cache`])
+//!    is taken as it is;
+//! 2. **uniform**: the cheapest uniform grid that meets the tolerance (`--quadrature uniform`'s
+//!    choice, the path the fit must beat);
+//! 3. **cost**: one frame on that grid, measured by the caller ([`Workload::frame_s`]), times
+//!    the frames, and the fit's time budget: a tenth of that path (so that a fit which finds
+//!    nothing better costs at most 10% more), or what the caller gives;
+//! 4. **fit**: where the budget is worth starting (more than gathering the scene's spectra
+//!    took once), the scene's fit as an anytime search within it; the fitted set where it meets
+//!    the tolerance with fewer nodes, else the uniform grid, and the reason;
+//! 5. **store**: a fit is stored in the cache, with whether its budget cut it short.
+
+use super::Scene;
+use crate::colorimetry::{Observer, RgbSpace};
+use crate::error::Result;
+use crate::quadrature::cache::{Cache, Key, Lookup};
+use crate::quadrature::choose::{Family, Selection};
+use crate::quadrature::fit::Options;
+use crate::quadrature::progress::Report;
+use crate::quadrature::{Kind, Quadrature};
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// The share of the uniform path's time a fit may spend by default.
+pub const FIT_SHARE: f64 = 0.1;
+
+/// How long the fit may search.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum FitBudget {
+    /// [`FIT_SHARE`] of the uniform path's predicted time.
+    Auto,
+    /// At most this many seconds.
+    Seconds(f64),
+    /// As long as it takes (`--quadrature scene`, `bench`, a viewer's background fit).
+    Unlimited,
+}
+
+/// What the quadrature will serve.
+pub struct Workload<'a> {
+    /// Frames rendered on it (1 for a still; a sequence's length).
+    pub frames: usize,
+    /// Seconds to prepare and render one frame on a quadrature (the caller's backend).
+    pub frame_s: &'a dyn Fn(&Quadrature) -> Result<f64>,
+}
+
+/// Where the chosen quadrature came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Source {
+    /// A stored choice, used as it is.
+    Cache,
+    /// This run's fit.
+    Fit,
+    /// The uniform grid, without a fit (it would not pay).
+    Uniform,
+}
+
+/// The plan: what the choice weighed, and what it took.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Plan {
+    pub frames: usize,
+    pub source: Source,
+    pub reason: String,
+    /// The uniform grid's nodes and its predicted time for every frame (not with a cache hit).
+    pub uniform_nodes: Option<usize>,
+    pub uniform_path_s: Option<f64>,
+    /// The time the fit was given (None: unlimited, or no fit ran).
+    pub fit_budget_s: Option<f64>,
+    /// The fit stopped at its budget before it was done.
+    pub cut_short: bool,
+    /// Seconds spent choosing, all stages.
+    pub seconds: f64,
+    /// The cache entry read or written, and a note on one that was ignored.
+    pub cache_file: Option<PathBuf>,
+    pub cache_note: Option<String>,
+}
+
+/// The chosen quadrature's selection and the plan that chose it.
+pub struct Planned {
+    pub selection: Selection,
+    pub plan: Plan,
+}
+
+/// What choosing needs besides the scene.
+pub struct Aim<'a> {
+    pub observer: Observer,
+    pub space: RgbSpace,
+    pub opts: Options,
+    pub budget: FitBudget,
+    pub cache: Option<&'a Cache>,
+}
+
+impl Scene {
+    /// `--tolerance` for `work`: the cheaper of a fit and the uniform grid (see the module
+    /// docs).
+    pub fn plan_quadrature(&self, aim: &Aim, work: &Workload, report: Report) -> Result<Planned> {
+        let t0 = Instant::now();
+        let key = Key::new(
+            &self.fingerprint(),
+            Family::Scene,
+            &aim.opts,
+            aim.observer,
+            aim.space,
+        );
+        let mut plan = Plan {
+            frames: work.frames,
+            source: Source::Cache,
+            reason: String::new(),
+            uniform_nodes: None,
+            uniform_path_s: None,
+            fit_budget_s: None,
+            cut_short: false,
+            seconds: 0.0,
+            cache_file: None,
+            cache_note: None,
+        };
+        let fixed = match aim.budget {
+            FitBudget::Seconds(s) => Some(s),
+            _ => None,
+        };
+        if let Some(cache) = aim.cache {
+            match cache.get(&key, fixed) {
+                Lookup::Hit(selection, file) => {
+                    plan.reason = "the scene's fit at this tolerance, from the cache".into();
+                    plan.cache_file = Some(file);
+                    plan.seconds = t0.elapsed().as_secs_f64();
+                    return Ok(Planned {
+                        selection: *selection,
+                        plan,
+                    });
+                }
+                Lookup::Miss(note) => plan.cache_note = note,
+                Lookup::Ignored(file, why) => {
+                    plan.cache_note = Some(format!("ignored {}: it {why}", file.display()))
+                }
+            }
+        }
+        let (uniform, budget) = self.weigh(aim, work, &mut plan, report)?;
+        let Some(budget) = budget else {
+            plan.source = Source::Uniform;
+            plan.seconds = t0.elapsed().as_secs_f64();
+            return Ok(Planned {
+                selection: uniform,
+                plan,
+            });
+        };
+        let opts = aim.opts.within_seconds(budget);
+        let fitted = self.choose_quadrature_reporting(
+            aim.observer,
+            aim.space,
+            Family::Scene,
+            &opts,
+            report,
+        )?;
+        plan.cut_short = opts.out_of_time();
+        plan.source = Source::Fit;
+        if let Some(cache) = aim.cache {
+            // A cache that cannot be written costs the next run a fit, nothing more.
+            match cache.put(&key, &fitted, budget, !plan.cut_short) {
+                Ok(file) => plan.cache_file = Some(file),
+                Err(e) => plan.cache_note = Some(format!("not stored: {e}")),
+            }
+        }
+        let selection = cheaper(fitted, uniform, &mut plan);
+        plan.seconds = t0.elapsed().as_secs_f64();
+        Ok(Planned { selection, plan })
+    }
+
+    /// The uniform grid at the tolerance, and the fit's budget in seconds: None where no fit
+    /// runs, Some(None) for one without a limit.
+    #[allow(clippy::type_complexity)]
+    fn weigh(
+        &self,
+        aim: &Aim,
+        work: &Workload,
+        plan: &mut Plan,
+        report: Report,
+    ) -> Result<(Selection, Option<Option<f64>>)> {
+        let t0 = Instant::now();
+        let uniform = self.choose_quadrature_reporting(
+            aim.observer,
+            aim.space,
+            Family::Uniform,
+            &aim.opts,
+            report,
+        )?;
+        let gather_s = t0.elapsed().as_secs_f64();
+        plan.uniform_nodes = Some(uniform.quadrature.len());
+        let budget = match aim.budget {
+            FitBudget::Unlimited => {
+                plan.reason = "a fit without a time budget".into();
+                return Ok((uniform, Some(None)));
+            }
+            FitBudget::Seconds(s) => {
+                plan.reason = format!("a fit within {s} s");
+                plan.fit_budget_s = Some(s);
+                return Ok((uniform, Some(Some(s))));
+            }
+            FitBudget::Auto => {
+                let t1 = Instant::now();
+                let frame = (work.frame_s)(&uniform.quadrature)?;
+                let measure_s = t1.elapsed().as_secs_f64();
+                let path = work.frames as f64 * frame;
+                plan.uniform_path_s = Some(path);
+                // The uniform path gathers the spectra too; measuring the frame is extra.
+                FIT_SHARE * (path + gather_s) - measure_s
+            }
+        };
+        plan.fit_budget_s = Some(budget.max(0.0));
+        let frames = match work.frames {
+            1 => "1 frame".to_string(),
+            n => format!("{n} frames"),
+        };
+        let path = plan.uniform_path_s.unwrap_or(0.0);
+        let n = uniform.quadrature.len();
+        // A fit gathers the spectra again before it can add a node.
+        if budget > 2.0 * gather_s {
+            plan.reason = format!(
+                "the uniform grid of {n} takes about {path:.1} s for {frames}; a fit may spend \
+                 {budget:.1} s ({:.0}% of it)",
+                100.0 * FIT_SHARE
+            );
+            return Ok((uniform, Some(Some(budget.max(0.0)))));
+        }
+        plan.reason = format!(
+            "a fit would cost more than it saves: the uniform grid of {n} takes about \
+             {path:.1} s for {frames}, and {:.0}% of that ({:.2} s) is less than gathering the \
+             scene's spectra twice ({:.2} s)",
+            100.0 * FIT_SHARE,
+            budget.max(0.0),
+            2.0 * gather_s
+        );
+        let mut uniform = uniform;
+        uniform.reason =
+            "the cheapest uniform grid that meets the target (no fit: see the plan)".into();
+        Ok((uniform, None))
+    }
+}
+
+/// The fit's selection, or the uniform one where the fit missed the target (its budget cut it
+/// short, say) and the uniform grid meets it, with the plan's reason.
+fn cheaper(fitted: Selection, uniform: Selection, plan: &mut Plan) -> Selection {
+    let took = format!("{:.1} s", fitted.seconds);
+    let cut = if plan.cut_short {
+        " (its budget cut it short)"
+    } else {
+        ""
+    };
+    if fitted.met || !uniform.met {
+        let what = match fitted.kind {
+            Kind::Scene => format!("{} fitted nodes", fitted.quadrature.len()),
+            _ => format!("the uniform grid of {}", fitted.quadrature.len()),
+        };
+        plan.reason = join(&plan.reason, &format!("the fit took {took}{cut}: {what}"));
+        return fitted;
+    }
+    plan.reason = join(
+        &plan.reason,
+        &format!(
+            "the fit took {took}{cut} and misses the target with {} nodes: the uniform grid of {}",
+            fitted.quadrature.len(),
+            uniform.quadrature.len()
+        ),
+    );
+    plan.source = Source::Uniform;
+    uniform
+}
+
+fn join(a: &str, b: &str) -> String {
+    if a.is_empty() {
+        b.to_string()
+    } else {
+        format!("{a}; {b}")
+    }
+}

@@ -1,0 +1,135 @@
+//! `render --tolerance` weighs the fit against what it saves: a still whose fit would not pay
+//! is drawn on the uniform grid at the tolerance, a fit is stored in the cache and reused by
+//! the next run, a corrupt entry is ignored with a note, and a fit cut short by its budget says
+//! so and still meets the tolerance on the image.
+
+use std::path::Path;
+use std::process::Command;
+
+/// `specmap render ARGS --json` with its cache in `cache`; the report and stderr.
+fn render(cache: &Path, args: &[&str]) -> (serde_json::Value, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_specmap"))
+        .arg("render")
+        .args(args)
+        .arg("--json")
+        .env("XDG_CACHE_HOME", cache)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(out.status.success(), "{args:?}: {err}");
+    (serde_json::from_slice(&out.stdout).unwrap(), err)
+}
+
+/// The ball at 48x48 on the CPU at tolerance 0.5, written to `dir`, with `more` options.
+fn ball(dir: &Path, more: &[&str]) -> (serde_json::Value, String) {
+    let png = dir.join("ball.png");
+    let mut args = vec![
+        "--scene",
+        "ball",
+        "--size",
+        "48x48",
+        "--backend",
+        "cpu",
+        "--tolerance",
+        "0.5",
+        "-o",
+        png.to_str().unwrap(),
+    ];
+    args.extend_from_slice(more);
+    render(&dir.join("cache"), &args)
+}
+
+fn entries(dir: &Path) -> Vec<std::path::PathBuf> {
+    match std::fs::read_dir(dir.join("cache/specmap/quadrature")) {
+        Ok(d) => d.map(|e| e.unwrap().path()).collect(),
+        Err(_) => Vec::new(),
+    }
+}
+
+#[test]
+fn a_still_whose_fit_would_not_pay_is_drawn_on_the_uniform_grid() {
+    let dir = tempfile::tempdir().unwrap();
+    let (r, _) = ball(dir.path(), &[]);
+    let plan = &r["quadrature_plan"];
+    assert_eq!(plan["source"], "uniform", "{plan}");
+    assert_eq!(r["quadrature"]["kind"], "uniform");
+    let reason = plan["reason"].as_str().unwrap();
+    assert!(reason.contains("would cost more than it saves"), "{reason}");
+    // Its uniform grid is the one --quadrature uniform chooses at the tolerance.
+    let (u, _) = ball(dir.path(), &["--quadrature", "uniform"]);
+    assert_eq!(r["quadrature"]["nodes_nm"], u["quadrature"]["nodes_nm"]);
+    assert!(plan["uniform_path_s"].as_f64().unwrap() > 0.0);
+    assert!(
+        entries(dir.path()).is_empty(),
+        "nothing fitted, nothing stored"
+    );
+}
+
+#[test]
+fn a_fit_is_stored_and_the_next_run_reuses_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let (fitted, _) = ball(dir.path(), &["--quadrature", "scene"]);
+    assert_eq!(fitted["quadrature_plan"]["source"], "fit");
+    assert_eq!(fitted["quadrature"]["kind"], "scene");
+    assert_eq!(entries(dir.path()).len(), 1);
+    let (again, _) = ball(dir.path(), &[]);
+    let plan = &again["quadrature_plan"];
+    assert_eq!(plan["source"], "cache", "{plan}");
+    assert_eq!(
+        again["quadrature"]["nodes_nm"],
+        fitted["quadrature"]["nodes_nm"]
+    );
+    assert_eq!(
+        again["quadrature"]["weights"],
+        fitted["quadrature"]["weights"]
+    );
+    // The same scene at another tolerance, size or light is another entry.
+    let (other, _) = ball(dir.path(), &["--light", "A"]);
+    assert_ne!(other["quadrature_plan"]["source"], "cache");
+    // --no-cache neither reads nor stores.
+    let (skip, _) = ball(dir.path(), &["--no-cache"]);
+    assert_ne!(skip["quadrature_plan"]["source"], "cache");
+    assert!(skip["quadrature_plan"]["cache_file"].is_null());
+}
+
+#[test]
+fn a_corrupt_entry_is_ignored_with_a_note_and_replaced() {
+    let dir = tempfile::tempdir().unwrap();
+    ball(dir.path(), &["--quadrature", "scene"]);
+    let file = entries(dir.path()).pop().unwrap();
+    let text = std::fs::read_to_string(&file).unwrap();
+    std::fs::write(&file, &text[..text.len() / 2]).unwrap();
+    let (r, err) = ball(dir.path(), &["--quadrature", "scene"]);
+    assert!(err.contains("note: quadrature cache: ignored"), "{err}");
+    assert!(err.contains("not a cache entry"), "{err}");
+    assert_eq!(r["quadrature_plan"]["source"], "fit");
+    // Stored again, whole.
+    let (again, _) = ball(dir.path(), &[]);
+    assert_eq!(again["quadrature_plan"]["source"], "cache");
+}
+
+#[test]
+fn a_fit_cut_short_by_its_budget_says_so_and_the_image_meets_the_tolerance() {
+    let dir = tempfile::tempdir().unwrap();
+    let (r, _) = ball(dir.path(), &["--fit-budget", "0", "--no-cache"]);
+    let plan = &r["quadrature_plan"];
+    assert_eq!(plan["cut_short"], true, "{plan}");
+    assert!(plan["reason"].as_str().unwrap().contains("cut it short"));
+    // Whatever was chosen, it meets the tolerance (the uniform grid where the fit missed).
+    let c = &r["quadrature_choice"];
+    assert_eq!(c["met"], true, "{c}");
+    if let Some(image) = c["image"]["max_dE2000"].as_f64() {
+        assert!(image <= 0.5, "{image}");
+    }
+    for bad in ["--fit-budget=-1", "--fit-budget=nan"] {
+        let out = Command::new(env!("CARGO_BIN_EXE_specmap"))
+            .args(["render", "--tolerance", "0.5", bad])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !out.status.success() && err.contains("--fit-budget"),
+            "{err}"
+        );
+    }
+}
