@@ -133,3 +133,117 @@ fn a_fit_cut_short_by_its_budget_says_so_and_the_image_meets_the_tolerance() {
         );
     }
 }
+
+/// The linear pixels of an EXR written by `render`.
+fn pixels(path: &Path) -> Vec<f32> {
+    use exr::prelude::*;
+    let image = read_first_rgba_layer_from_file(
+        path,
+        |r, _| vec![0f32; r.width() * r.height() * 3],
+        |v: &mut Vec<f32>, p, (r, g, b, _a): (f32, f32, f32, f32)| {
+            let i = 3 * (p.y() * 48 + p.x());
+            v[i..i + 3].copy_from_slice(&[r, g, b]);
+        },
+    )
+    .unwrap();
+    image.layer_data.channel_data.pixels
+}
+
+/// Each frame of a turntable is the still at its orbit, and each frame of a thickness sweep
+/// the still at its thickness, on the same wavelengths.
+#[test]
+fn a_sequences_frames_are_the_stills_at_their_orbits_and_thicknesses() {
+    let dir = tempfile::tempdir().unwrap();
+    let at = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    let common = ["--size", "48x48", "--backend", "cpu", "--samples", "41"];
+    let run = |more: &[&str]| {
+        let mut args: Vec<&str> = common.to_vec();
+        args.extend_from_slice(more);
+        render(&dir.path().join("cache"), &args).0
+    };
+    let turn = run(&[
+        "--scene",
+        "ball",
+        "--turntable",
+        "4",
+        "--orbit",
+        "30,20",
+        "-o",
+        &at("t.exr"),
+    ]);
+    assert_eq!(turn["frames"].as_array().unwrap().len(), 4);
+    let sweep = run(&[
+        "--scene",
+        "ball",
+        "--film",
+        "2.7:100..400",
+        "--frames",
+        "4",
+        "-o",
+        &at("s.exr"),
+    ]);
+    assert_eq!(sweep["frames"][3]["at"], 4.0);
+    for k in 0..4 {
+        let yaw = format!("{},20", 30 + 90 * k);
+        run(&[
+            "--scene",
+            "ball",
+            "--orbit",
+            &yaw,
+            "-o",
+            &at(&format!("still-t{k}.exr")),
+        ]);
+        let film = format!("2.7:{}", 100 * (k + 1));
+        run(&[
+            "--scene",
+            "ball",
+            "--film",
+            &film,
+            "-o",
+            &at(&format!("still-s{k}.exr")),
+        ]);
+        for (seq, still) in [("t", "still-t"), ("s", "still-s")] {
+            let a = pixels(&dir.path().join(format!("{seq}-{k:03}.exr")));
+            let b = pixels(&dir.path().join(format!("{still}{k}.exr")));
+            assert_eq!(a, b, "frame {k} of {seq}");
+        }
+    }
+    // The frames differ: the sun turns, the film thickens.
+    let f = |n: &str| pixels(&dir.path().join(n));
+    assert_ne!(f("t-000.exr"), f("t-001.exr"));
+    assert_ne!(f("s-000.exr"), f("s-003.exr"));
+}
+
+/// A sequence fits once, for every frame: one plan, one cache entry, every frame on it.
+#[test]
+fn a_sequence_fits_once_for_every_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("t.png");
+    let args = [
+        "--scene",
+        "ball",
+        "--size",
+        "48x48",
+        "--backend",
+        "cpu",
+        "--turntable",
+        "6",
+        "--tolerance",
+        "0.5",
+        "--quadrature",
+        "scene",
+        "-o",
+        out.to_str().unwrap(),
+    ];
+    let (r, _) = render(&dir.path().join("cache"), &args);
+    assert_eq!(r["quadrature_plan"]["source"], "fit");
+    assert_eq!(r["quadrature_plan"]["frames"], 6);
+    assert_eq!(r["frames"].as_array().unwrap().len(), 6);
+    assert_eq!(entries(dir.path()).len(), 1);
+    for k in 0..6 {
+        assert!(dir.path().join(format!("t-{k:03}.png")).exists());
+    }
+    // Run again, the same turntable reads its fit from the cache.
+    let (again, _) = render(&dir.path().join("cache"), &args);
+    assert_eq!(again["quadrature_plan"]["source"], "cache");
+}

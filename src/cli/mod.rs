@@ -13,6 +13,7 @@ mod render;
 mod rendition;
 mod roundtrip;
 pub mod runtime_dir;
+mod sequence;
 mod thinfilm;
 mod tolerance;
 mod view;

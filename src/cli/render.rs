@@ -2,6 +2,7 @@
 //! the GPU or the CPU, and the speed-for-accuracy sweep.
 
 use super::outln;
+use super::sequence::{film_range, Sequence, SequenceReport};
 use super::{ObserverArg, RuleArg};
 use anyhow::Context;
 use clap::{Args, ValueEnum};
@@ -122,6 +123,14 @@ pub struct RenderArgs {
     /// Zoom: the view's height divided by F (2 shows half as much, twice as large).
     #[arg(long, value_name = "F")]
     pub(crate) zoom: Option<f64>,
+    /// A turntable: N frames orbiting the scene once (from --orbit's yaw, at its pitch), drawn
+    /// on one quadrature and written as numbered images (-o turn.png: turn-000.png, ...).
+    #[arg(long, value_name = "N", conflicts_with_all = ["sweep", "frames"])]
+    pub(crate) turntable: Option<usize>,
+    /// A thickness sweep: N frames with the film from its ranges' starts to their ends
+    /// (--film 2.7:100..400), on one quadrature, written as numbered images.
+    #[arg(long, value_name = "N", conflicts_with = "sweep")]
+    pub(crate) frames: Option<usize>,
     /// Exposure in stops applied to the written image.
     #[arg(
         long,
@@ -316,6 +325,8 @@ impl RenderArgs {
             "backend",
             (self.backend != BackendArg::Auto).then(|| name(&self.backend)),
         );
+        opt("turntable", self.turntable.map(|v| v.to_string()));
+        opt("frames", self.frames.map(|v| v.to_string()));
         opt("orbit", self.orbit.clone());
         opt("zoom", num(self.zoom));
         opt(
@@ -364,7 +375,7 @@ impl RenderArgs {
     }
 }
 
-pub fn run(a: RenderArgs) -> anyhow::Result<()> {
+pub fn run(mut a: RenderArgs) -> anyhow::Result<()> {
     if !(a.exposure.is_finite() && a.exposure.abs() <= 64.0) {
         anyhow::bail!(
             "--exposure {}: stops must be between -64 and 64",
@@ -386,6 +397,14 @@ pub fn run(a: RenderArgs) -> anyhow::Result<()> {
         .output
         .clone()
         .unwrap_or_else(|| PathBuf::from(format!("render-{}.png", preset.name())));
+    // A sequence: the film at its ranges' starts, and the scene as built (each frame orbits
+    // it or scales its films).
+    let (film, ratio) = a.film.as_deref().map(film_range).transpose()?.unzip();
+    a.film = film;
+    let sequence = Sequence::of(&a, ratio.flatten())?;
+    if matches!(sequence, Some(Sequence::Turntable { .. })) {
+        a.orbit = None;
+    }
     let mut guard = super::guard::Guard::new();
     if let Some(p) = &a.env {
         guard.input("--env", p);
@@ -402,9 +421,16 @@ pub fn run(a: RenderArgs) -> anyhow::Result<()> {
             }
         }
         (Some(_), None) => {}
-        (None, _) => {
-            guard.output("-o", &output);
-        }
+        (None, _) => match &sequence {
+            Some(seq) => {
+                for k in 0..seq.frames() {
+                    guard.output("-o", seq.file(&output, k));
+                }
+            }
+            None => {
+                guard.output("-o", &output);
+            }
+        },
     }
     guard.check()?;
     let (lighting, env_report) = load_env(&a)?.unzip();
@@ -429,19 +455,19 @@ pub fn run(a: RenderArgs) -> anyhow::Result<()> {
     } else {
         Backend::Cpu
     };
-    let frames = 1;
     let serving = super::tolerance::Serving {
         gpu: gpu.as_ref(),
-        frames,
+        frames: sequence.as_ref().map_or(1, Sequence::frames),
     };
-    let chosen = match a.fit_range.as_deref().map(fit_range).transpose()? {
-        Some(scales) => {
-            let mut fit_scene = scene.clone();
-            fit_scene.for_any_view(scales);
-            super::tolerance::quadrature_for(&fit_scene, &spectral, &a, &serving)?
-        }
-        None => super::tolerance::quadrature_for(&scene, &spectral, &a, &serving)?,
+    // The scene the quadrature must hold for: every frame's, and the view's range.
+    let mut fit_scene = match &sequence {
+        Some(seq) => seq.fit_scene(&scene),
+        None => scene.clone(),
     };
+    if let Some(scales) = a.fit_range.as_deref().map(fit_range).transpose()? {
+        fit_scene.for_any_view(scales);
+    }
+    let chosen = super::tolerance::quadrature_for(&fit_scene, &spectral, &a, &serving)?;
     let (quadrature, selection, plan) = (chosen.quadrature, chosen.selection, chosen.plan);
     let adapter = gpu.as_ref().map(|g| g.adapter());
 
@@ -496,6 +522,24 @@ pub fn run(a: RenderArgs) -> anyhow::Result<()> {
         return Ok(());
     }
 
+    if let Some(seq) = &sequence {
+        let t0 = Instant::now();
+        let frames = seq.render(
+            &scene,
+            &quadrature,
+            spectral.space,
+            gpu.as_ref(),
+            (&output, a.exposure),
+        )?;
+        let report = SequenceReport {
+            frames,
+            seconds: t0.elapsed().as_secs_f64(),
+            quadrature: &quadrature,
+            selection: selection.as_ref(),
+            plan: plan.as_ref(),
+        };
+        return report.emit(&scene, a.json, backend, gpu.as_ref().map(|g| g.adapter()));
+    }
     let t0 = Instant::now();
     let prepared = Prepared::with_quadrature(&scene, &quadrature, spectral.space)?;
     let prepare_s = t0.elapsed().as_secs_f64();

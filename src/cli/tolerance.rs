@@ -158,8 +158,8 @@ impl Drop for Spinner {
 }
 
 /// Seconds to prepare and draw one frame of `scene` on `q`, measured on a sample: on the CPU,
-/// every [`CPU_STRIDE`]th row and column of the image; on the GPU, the image at a quarter of
-/// its width and height. The draw's time is scaled up by the pixels left out.
+/// rows spread over the image, about [`CPU_SAMPLE`] pixels; on the GPU, the image at a quarter of its
+/// width and height. The draw's time is scaled up by the pixels left out.
 fn frame_seconds(
     scene: &Scene,
     q: &Quadrature,
@@ -172,14 +172,16 @@ fn frame_seconds(
         None => {
             let p = Prepared::with_quadrature(scene, q, space)?;
             let prepare_s = t0.elapsed().as_secs_f64();
-            let at: Vec<[usize; 2]> = (CPU_STRIDE / 2..scene.height)
-                .step_by(CPU_STRIDE)
-                .flat_map(|y| {
-                    (CPU_STRIDE / 2..scene.width)
-                        .step_by(CPU_STRIDE)
-                        .map(move |x| [x, y])
-                })
+            // Whole rows: the renderer draws a row's pixels one after another, and a lattice of
+            // single pixels costs 2-3 times as much each (the ball at 256x256).
+            let rows = (CPU_SAMPLE / scene.width).clamp(1, scene.height);
+            let step = scene.height / rows;
+            let at: Vec<[usize; 2]> = (step / 2..scene.height)
+                .step_by(step)
+                .flat_map(|y| (0..scene.width).map(move |x| [x, y]))
                 .collect();
+            // A first row warms the threads and caches up; the sample is timed after it.
+            cpu::render_pixels(&p, &at[..scene.width.min(at.len())]);
             let t1 = Instant::now();
             cpu::render_pixels(&p, &at);
             let draw_s = t1.elapsed().as_secs_f64();
@@ -199,8 +201,9 @@ fn frame_seconds(
     }
 }
 
-/// The CPU's sample for [`frame_seconds`]: one pixel in this many along each axis.
-const CPU_STRIDE: usize = 8;
+/// The CPU's sample for [`frame_seconds`]: about this many pixels (fewer leave the threads
+/// idle; a 512x512 image is sampled on every 64th row).
+const CPU_SAMPLE: usize = 4096;
 
 /// The fit's options for `--tolerance` and `--max-nodes`: a budget bounds the scene's
 /// quadrature, not a uniform grid (whose count `--samples` sets).

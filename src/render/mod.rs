@@ -408,6 +408,13 @@ impl Scene {
     /// over those scales (the stimuli sample a ramp's whole range).
     pub fn for_any_view(&mut self, scales: (f64, f64)) {
         self.any_orientation = true;
+        self.for_thicknesses(scales);
+    }
+
+    /// The scene a choice of quadrature must hold for when each main film's thickness may scale
+    /// from `scales.0` to `scales.1` (a thickness sweep's frames): each main object's film
+    /// without a ramp given one over those scales.
+    pub fn for_thicknesses(&mut self, scales: (f64, f64)) {
         let half = self.view.half_height * self.width as f64 / self.height as f64;
         let (x0, x1) = (self.view.center[0] - half, self.view.center[0] + half);
         for o in self.objects.iter_mut().filter(|o| o.main) {

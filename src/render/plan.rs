@@ -28,6 +28,9 @@ use std::time::Instant;
 /// The share of the uniform path's time a fit may spend by default.
 pub const FIT_SHARE: f64 = 0.1;
 
+/// The nodes of the image's check: the 1 nm grid over 380-780 nm.
+const IMAGE_CHECK_NODES: f64 = 401.0;
+
 /// How long the fit may search.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
@@ -69,8 +72,10 @@ pub struct Plan {
     /// The uniform grid's nodes and its predicted time for every frame (not with a cache hit).
     pub uniform_nodes: Option<usize>,
     pub uniform_path_s: Option<f64>,
-    /// The time the fit was given (None: unlimited, or no fit ran).
+    /// The time the fit's search was given (None: unlimited, or no fit ran).
     pub fit_budget_s: Option<f64>,
+    /// The predicted time of the fit's last check on the image (with a budget of its own).
+    pub image_check_s: Option<f64>,
     /// The fit stopped at its budget before it was done.
     pub cut_short: bool,
     /// Seconds spent choosing, all stages.
@@ -114,6 +119,7 @@ impl Scene {
             uniform_nodes: None,
             uniform_path_s: None,
             fit_budget_s: None,
+            image_check_s: None,
             cut_short: false,
             seconds: 0.0,
             cache_file: None,
@@ -207,8 +213,14 @@ impl Scene {
                 let measure_s = t1.elapsed().as_secs_f64();
                 let path = work.frames as f64 * frame;
                 plan.uniform_path_s = Some(path);
-                // The uniform path gathers the spectra too; measuring the frame is extra.
-                FIT_SHARE * (path + gather_s) - measure_s
+                // The uniform path gathers the spectra too; measuring the frame is extra, and
+                // so is the fit's last check, the image's lattice at 1 nm (401 nodes), which
+                // runs after the search: the search stops in time for it.
+                let n = uniform.quadrature.len() as f64;
+                let share = self.image_check_pixels() as f64 / (self.width * self.height) as f64;
+                let check_s = frame * IMAGE_CHECK_NODES / n * share;
+                plan.image_check_s = Some(check_s);
+                FIT_SHARE * (path + gather_s) - measure_s - check_s
             }
         };
         plan.fit_budget_s = Some(budget.max(0.0));
@@ -222,15 +234,16 @@ impl Scene {
         if budget > 2.0 * gather_s {
             plan.reason = format!(
                 "the uniform grid of {n} takes about {path:.1} s for {frames}; a fit may spend \
-                 {budget:.1} s ({:.0}% of it)",
-                100.0 * FIT_SHARE
+                 {:.0}% of it: {budget:.1} s searching and {:.1} s checking the image",
+                100.0 * FIT_SHARE,
+                plan.image_check_s.unwrap_or(0.0)
             );
             return Ok((uniform, Some(Some(budget.max(0.0)))));
         }
         plan.reason = format!(
             "a fit would cost more than it saves: the uniform grid of {n} takes about \
-             {path:.1} s for {frames}, and {:.0}% of that ({:.2} s) is less than gathering the \
-             scene's spectra twice ({:.2} s)",
+             {path:.1} s for {frames}, and {:.0}% of that, less the image's check, leaves \
+             {:.2} s, less than gathering the scene's spectra twice ({:.2} s)",
             100.0 * FIT_SHARE,
             budget.max(0.0),
             2.0 * gather_s

@@ -6,7 +6,7 @@ use crate::cli::demo::sh;
 use crate::cli::render::RenderArgs;
 
 /// Options that only `render`'s still output or report use: never part of what is shown.
-const STILL_ONLY: [&str; 1] = ["output"];
+const STILL_ONLY: [&str; 3] = ["output", "turntable", "frames"];
 
 /// `render`'s options, in `--help`'s order, each set away from its default.
 #[derive(Debug, Clone, PartialEq)]

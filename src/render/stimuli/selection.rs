@@ -188,6 +188,11 @@ impl Scene {
         Ok(s)
     }
 
+    /// The pixels the last check of a fit renders at 1 nm ([`pixels`]).
+    pub fn image_check_pixels(&self) -> usize {
+        pixels::lattice_len(self.width, self.height)
+    }
+
     /// The image's 1 nm render on its lattice: `made` if an earlier round made it.
     fn image_reference(
         &self,
