@@ -247,3 +247,36 @@ fn a_sequence_fits_once_for_every_frame() {
     let (again, _) = render(&dir.path().join("cache"), &args);
     assert_eq!(again["quadrature_plan"]["source"], "cache");
 }
+
+/// `color --tolerance` stores its fit too, and says when the next run read it.
+#[test]
+fn colour_fits_are_cached_too() {
+    let dir = tempfile::tempdir().unwrap();
+    let color = |more: &[&str]| -> serde_json::Value {
+        let out = Command::new(env!("CARGO_BIN_EXE_specmap"))
+            .args([
+                "color",
+                "colorchecker:red",
+                "--under",
+                "FL2",
+                "--tolerance",
+                "0.5",
+            ])
+            .args(more)
+            .arg("--json")
+            .env("XDG_CACHE_HOME", dir.path())
+            .output()
+            .unwrap();
+        assert!(out.status.success());
+        serde_json::from_slice(&out.stdout).unwrap()
+    };
+    let first = color(&[]);
+    assert!(first["quadrature_choice"]["from_cache"].is_null());
+    let second = color(&[]);
+    assert!(
+        second["quadrature_choice"]["from_cache"].is_string(),
+        "{second}"
+    );
+    assert_eq!(second["quadrature"], first["quadrature"]);
+    assert!(color(&["--no-cache"])["quadrature_choice"]["from_cache"].is_null());
+}

@@ -47,6 +47,10 @@ pub struct ColorArgs {
     /// of the colour alone); `meyer` is Meyer's four-wavelength Gaussian quadrature.
     #[arg(long, value_enum, value_name = "KIND")]
     quadrature: Option<QuadratureArg>,
+    /// Neither read nor store the fitted wavelengths in the cache
+    /// ($XDG_CACHE_HOME/specmap/quadrature, else ~/.cache/specmap/quadrature).
+    #[arg(long)]
+    no_cache: bool,
     /// Machine-readable output.
     #[arg(long)]
     json: bool,
@@ -137,7 +141,7 @@ pub fn run(a: ColorArgs) -> anyhow::Result<()> {
         super::write_grid_choice(&mut out, c);
     }
     if let Some(s) = &selection {
-        super::tolerance::write_selection(&mut out, s, false);
+        super::tolerance::write_selection(&mut out, s);
     }
     super::write_xyz(&mut out, xyz);
     match temperature.kelvin {
@@ -241,10 +245,50 @@ fn quadrature_for(
                 end_nm: end,
                 white: White::OwnLight,
             };
-            let s = choose::select(&scene, Family::Scene, &opts)?;
+            let s = cached_select(&scene, &opts, !a.no_cache)?;
             (s.quadrature.clone(), None, Some(s))
         }
     })
+}
+
+/// The scene fit of `scene` at `opts`: from the user's cache where a run before made it (when
+/// `use_cache`), else fitted and stored. A note on stderr says which.
+fn cached_select(
+    scene: &choose::Scene,
+    opts: &specmap::quadrature::fit::Options,
+    use_cache: bool,
+) -> anyhow::Result<Selection> {
+    use specmap::quadrature::cache::{Cache, Key, Lookup};
+    let cache = use_cache.then(Cache::in_user_folder).flatten();
+    let Some(cache) = cache else {
+        return Ok(choose::select(scene, Family::Scene, opts)?);
+    };
+    let stimuli = format!(
+        "{:?} {:?} {:?} {} {} {:?}",
+        scene.fit, scene.held_out, scene.white, scene.start_nm, scene.end_nm, scene.observer
+    );
+    let key = Key::new(
+        stimuli.as_bytes(),
+        Family::Scene,
+        opts,
+        scene.observer,
+        RgbSpace::SRGB,
+    );
+    match cache.get(&key, None) {
+        Lookup::Hit(s, _) => return Ok(*s),
+        Lookup::Ignored(file, why) => {
+            eprintln!(
+                "note: quadrature cache: ignored {}: it {why}",
+                file.display()
+            )
+        }
+        Lookup::Miss(_) => {}
+    }
+    let s = choose::select(scene, Family::Scene, opts)?;
+    if let Err(e) = cache.put(&key, &s, None, true) {
+        eprintln!("note: quadrature cache: not stored: {e}");
+    }
+    Ok(s)
 }
 
 /// XYZ of the stimulus on the quadrature (Eq. 10/11: a white under the light is Y = 100) and

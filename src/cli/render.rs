@@ -596,10 +596,7 @@ pub fn run(mut a: RenderArgs) -> anyhow::Result<()> {
         super::tolerance::write_plan(&mut out, p);
     }
     if let Some(c) = &selection {
-        let cached = plan
-            .as_ref()
-            .is_some_and(|p| p.source == specmap::render::plan::Source::Cache);
-        super::tolerance::write_selection(&mut out, c, cached);
+        super::tolerance::write_selection(&mut out, c);
     }
     if let Some(r) = &env_report {
         outln!(

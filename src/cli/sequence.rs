@@ -8,7 +8,7 @@ use specmap::colorimetry::RgbSpace;
 use specmap::quadrature::choose::Selection;
 use specmap::quadrature::Quadrature;
 use specmap::render::gpu::{AdapterReport, Gpu};
-use specmap::render::plan::{Plan, Source};
+use specmap::render::plan::Plan;
 use specmap::render::prepare::Prepared;
 use specmap::render::{cpu, Backend, Orbit, Scene};
 use specmap::thinfilm::Layer;
@@ -244,8 +244,7 @@ impl SequenceReport<'_> {
             super::tolerance::write_plan(&mut out, p);
         }
         if let Some(s) = self.selection {
-            let cached = self.plan.is_some_and(|p| p.source == Source::Cache);
-            super::tolerance::write_selection(&mut out, s, cached);
+            super::tolerance::write_selection(&mut out, s);
         }
         let n = self.frames.len().max(1) as f64;
         outln!(

@@ -224,7 +224,7 @@ pub(crate) fn tolerance_options(
 }
 
 /// Appends what `--tolerance` chose, and why.
-pub(crate) fn write_selection(out: &mut String, s: &Selection, cached: bool) {
+pub(crate) fn write_selection(out: &mut String, s: &Selection) {
     outln!(
         out,
         "  quadrature   {}: estimate {:.3} {} target {:.3} (tolerance {} x margin {:.2}{}); {}",
@@ -267,7 +267,7 @@ pub(crate) fn write_selection(out: &mut String, s: &Selection, cached: bool) {
         outln!(
             out,
             "               {} in {:.1} s: {}",
-            if cached {
+            if s.from_cache.is_some() {
                 "fitted (when stored)"
             } else {
                 "chosen"

@@ -138,7 +138,9 @@ impl Cache {
                 "the cached fit was cut short at {then} s; this run may fit longer"
             )));
         }
-        Lookup::Hit(Box::new(entry.selection), file)
+        let mut selection = entry.selection;
+        selection.from_cache = Some(file.clone());
+        Lookup::Hit(Box::new(selection), file)
     }
 
     /// Stores `selection` under `key`, made within `budget_s` seconds (cut short or not), and
@@ -160,7 +162,10 @@ impl Cache {
             key: key.0.clone(),
             complete,
             budget_s,
-            selection: selection.clone(),
+            selection: Selection {
+                from_cache: None,
+                ..selection.clone()
+            },
         };
         let file = self.file(key);
         let text = serde_json::to_string_pretty(&entry)

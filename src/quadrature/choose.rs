@@ -79,6 +79,9 @@ pub struct Selection {
     /// Seconds the choice took, and where they went (a scene's choice fills them).
     pub seconds: f64,
     pub stages: Vec<super::progress::StageTime>,
+    /// The cache entry it was read from ([`super::cache`]); None for a choice made now.
+    #[serde(default)]
+    pub from_cache: Option<std::path::PathBuf>,
 }
 
 /// A quadrature's render against the 1 nm Simpson render of the same image, on a lattice of
@@ -285,6 +288,7 @@ pub fn select_reporting(
         image: None,
         seconds: 0.0,
         stages: Vec::new(),
+        from_cache: None,
     })
 }
 

@@ -8,8 +8,10 @@
 
 use crate::cli::render::{QuadratureArg, RenderArgs};
 use crate::cli::tolerance::tolerance_options;
+use specmap::quadrature::cache::Cache;
 use specmap::quadrature::choose::{Family, Selection};
 use specmap::quadrature::Quadrature;
+use specmap::render::plan::{Aim, FitBudget, Workload};
 use specmap::render::{Film, Scene};
 use std::sync::mpsc::{channel, Receiver};
 use std::sync::{Arc, Mutex};
@@ -211,13 +213,36 @@ pub(crate) fn start(
                         *m = s.to_string();
                     }
                 };
-                Ok(scene.choose_quadrature_reporting(
-                    spectral.observer,
-                    spectral.space,
-                    family,
-                    &opts,
-                    &report,
-                )?)
+                if family == Family::Uniform {
+                    return Ok(scene.choose_quadrature_reporting(
+                        spectral.observer,
+                        spectral.space,
+                        family,
+                        &opts,
+                        &report,
+                    )?);
+                }
+                // The scene's fit: from the cache where an earlier view or render made it, else
+                // fitted for as long as it takes (the view draws on an interim grid meanwhile)
+                // and stored.
+                let cache = (!args.no_cache).then(Cache::in_user_folder).flatten();
+                let aim = Aim {
+                    observer: spectral.observer,
+                    space: spectral.space,
+                    opts,
+                    budget: args
+                        .fit_budget
+                        .map_or(FitBudget::Unlimited, FitBudget::Seconds),
+                    cache: cache.as_ref(),
+                };
+                // Never called: a budget that is unlimited or given weighs no frames.
+                let frame_s = |_: &Quadrature| Ok(0.0);
+                let work = Workload {
+                    frames: 1,
+                    frame_s: &frame_s,
+                };
+                let p = scene.plan_quadrature(&aim, &work, &report)?;
+                Ok(p.selection)
             };
             let _ = tx.send(run());
             wake();
