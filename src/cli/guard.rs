@@ -108,7 +108,8 @@ impl Guard {
                 }
                 if !dir.is_dir() {
                     anyhow::bail!(
-                        "{what} {}: the folder {} does not exist (no command creates the folder                          of an output file: create it first)",
+                        "{what} {}: the folder {} does not exist (no command creates the folder of an \
+                         output file: create it first)",
                         out.display(),
                         dir.display()
                     );

@@ -343,7 +343,11 @@ fn within_budget(
     let mut best = within;
     for &fixed in &fixings {
         let kept = best.as_ref();
-        let searched = best_of_seeds(p, held_out, budget, fixed, f64::INFINITY, kept, report)?;
+        let aim = SeedAim {
+            reach: f64::INFINITY,
+            enough: 0.0,
+        };
+        let searched = best_of_seeds(p, held_out, budget, fixed, aim, kept, report)?;
         let max = kept.map_or(f64::INFINITY, Candidate::max);
         if let Some(c) = searched.filter(|c| c.max() < max) {
             best = Some(c);
@@ -762,8 +766,11 @@ fn reseed(
 ) -> Result<Candidate> {
     while best.cols.len() > fixed.len() + 2 && !p.out_of_time() {
         let count = best.cols.len() - 1;
-        let reach = SEED_REACH * target;
-        match best_of_seeds(p, held_out, count, fixed, reach, Some(&best), report)? {
+        let aim = SeedAim {
+            reach: SEED_REACH * target,
+            enough: target,
+        };
+        match best_of_seeds(p, held_out, count, fixed, aim, Some(&best), report)? {
             Some(c) if c.max() <= target => best = c,
             _ => break,
         }
@@ -771,17 +778,28 @@ fn reseed(
     Ok(best)
 }
 
+/// What [`best_of_seeds`] aims at: seeds whose best judged errs beyond `reach` are not searched
+/// (too far for a descent to bring within it), and a set that errs at most `enough` ends the
+/// search (pruning needs a set that meets the target, not the best one: the next count starts
+/// from fresh seeds anyway).
+#[derive(Debug, Clone, Copy)]
+struct SeedAim {
+    reach: f64,
+    enough: f64,
+}
+
 /// The best set of `count` nodes from fresh starts: the [`seeds`] ranked by a quick minimax,
 /// the [`SEEDS_JUDGED`] best judged fully, and the [`SEEDS_DESCENDED`] best of those improved
-/// by [`exchange`] and by [`descend`] and [`reweigh`]ed. None where no seed can be solved, or
-/// where the best judged seed errs beyond `reach` (too far for a descent to bring within it).
-/// `kept` is the set the caller holds, for the report.
+/// by [`exchange`] and, unless the exchange already erred at most `aim.enough`, by [`descend`],
+/// and [`reweigh`]ed; the first set within `aim.enough` ends the search. None where no seed can
+/// be solved, or where the best judged seed errs beyond `aim.reach`. `kept` is the set the
+/// caller holds, for the report.
 fn best_of_seeds(
     p: &Problem,
     held_out: Option<&Estimator>,
     count: usize,
     fixed: &[usize],
-    reach: f64,
+    aim: SeedAim,
     kept: Option<&Candidate>,
     report: Report,
 ) -> Result<Option<Candidate>> {
@@ -796,7 +814,7 @@ fn best_of_seeds(
     quick.sort_by(|a, b| a.1.total_cmp(&b.1));
     quick.truncate(SEEDS_JUDGED);
     let judged = judge_all(p, held_out, quick.into_iter().map(|(c, _)| c).collect())?;
-    if judged.first().is_none_or(|c| c.max() > reach) {
+    if judged.first().is_none_or(|c| c.max() > aim.reach) {
         return Ok(None);
     }
     let mut found: Option<Candidate> = None;
@@ -816,15 +834,23 @@ fn best_of_seeds(
         // smooth landscapes) and a descent judging every move (films' abrupt ones).
         report(&stage("exchange"));
         let wide = exchange(p, held_out, seed.clone(), fixed)?;
-        report(&stage("descent"));
-        let fine = descend(p, held_out, seed, fixed)?;
-        let c = reweigh(
-            p,
-            held_out,
-            if wide.max() < fine.max() { wide } else { fine },
-        )?;
+        let better = if wide.max() <= aim.enough {
+            wide
+        } else {
+            report(&stage("descent"));
+            let fine = descend(p, held_out, seed, fixed)?;
+            if wide.max() < fine.max() {
+                wide
+            } else {
+                fine
+            }
+        };
+        let c = reweigh(p, held_out, better)?;
         if found.as_ref().is_none_or(|f| c.max() < f.max()) {
             found = Some(c);
+        }
+        if found.as_ref().is_some_and(|f| f.max() <= aim.enough) {
+            break;
         }
     }
     Ok(found)

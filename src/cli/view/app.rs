@@ -263,7 +263,17 @@ impl App {
                 }
             }
         }
-        let finished = self.fit.as_ref().and_then(|r| r.result.try_recv().ok());
+        let sent = self.fit.as_ref().and_then(|r| r.result.try_recv().ok());
+        let finished = match sent {
+            Some(fit::Sent::Interim(s)) => {
+                // A first set, found quickly: drawn with while the fit goes on.
+                let covers = self.fit.as_ref().expect("a running fit").covers.clone();
+                self.take_fitted(covers, *s, ctx);
+                None
+            }
+            Some(fit::Sent::Final(result)) => Some(result),
+            None => None,
+        };
         if let Some(result) = finished {
             let r = self.fit.take().expect("a running fit");
             let seconds = r.started.elapsed().as_secs_f64();
@@ -278,15 +288,7 @@ impl App {
                         "kind": s.kind,
                         "thickness_scales": [r.covers.scales.0, r.covers.scales.1],
                     }));
-                    let id = self.id();
-                    let w = Wavelengths {
-                        quadrature: Arc::new(s.quadrature.clone()),
-                        kind: "scene".into(),
-                        estimate: Some(s.estimate_de2000),
-                        id,
-                    };
-                    self.fitted = Some((r.covers, s, w));
-                    self.follow_mode(Some(ctx));
+                    self.take_fitted(r.covers, *s, ctx);
                 }
                 Err(e) => {
                     let e = format!("the fit failed: {e:#}");
@@ -295,6 +297,19 @@ impl App {
                 }
             }
         }
+    }
+
+    /// Frames are drawn with the fitted `s`, made for `covers`, from now on.
+    fn take_fitted(&mut self, covers: Covers, s: Selection, ctx: &egui::Context) {
+        let id = self.id();
+        let w = Wavelengths {
+            quadrature: Arc::new(s.quadrature.clone()),
+            kind: "scene".into(),
+            estimate: Some(s.estimate_de2000),
+            id,
+        };
+        self.fitted = Some((covers, s, w));
+        self.follow_mode(Some(ctx));
     }
 
     /// A frame arrived: onto the screen, into the report.

@@ -10,8 +10,9 @@ use crate::cli::render::{QuadratureArg, RenderArgs};
 use crate::cli::tolerance::tolerance_options;
 use specmap::quadrature::cache::Cache;
 use specmap::quadrature::choose::{Family, Selection};
+use specmap::quadrature::Kind;
 use specmap::quadrature::Quadrature;
-use specmap::render::plan::{Aim, FitBudget, Workload};
+use specmap::render::plan::{Aim, FitBudget, Source, Workload};
 use specmap::render::{Film, Scene};
 use std::sync::mpsc::{channel, Receiver};
 use std::sync::{Arc, Mutex};
@@ -172,12 +173,21 @@ pub(crate) fn mode(args: &RenderArgs) -> anyhow::Result<Mode> {
     })
 }
 
+/// What the fit's thread sends: a set to draw with while it goes on, then its result.
+pub(crate) enum Sent {
+    Interim(Box<Selection>),
+    Final(anyhow::Result<Box<Selection>>),
+}
+
+/// Seconds the view's first, quick fit may search ([`start`]).
+pub(crate) const INTERIM_S: f64 = 2.0;
+
 /// A fit on its own thread.
 pub(crate) struct Running {
     pub covers: Covers,
     pub stage: Arc<Mutex<String>>,
     pub started: Instant,
-    pub result: Receiver<anyhow::Result<Selection>>,
+    pub result: Receiver<Sent>,
 }
 
 /// Starts the fit for `args` (whose mode is [`Mode::Fitted`]); `wake` is called when it ends.
@@ -223,28 +233,39 @@ pub(crate) fn start(
                     )?);
                 }
                 // The scene's fit: from the cache where an earlier view or render made it, else
-                // fitted for as long as it takes (the view draws on an interim grid meanwhile)
-                // and stored.
+                // fitted and stored. Without --fit-budget, first within INTERIM_S seconds (the
+                // view draws with its set at once), then for as long as it takes.
                 let cache = (!args.no_cache).then(Cache::in_user_folder).flatten();
-                let aim = Aim {
-                    observer: spectral.observer,
-                    space: spectral.space,
-                    opts,
-                    budget: args
-                        .fit_budget
-                        .map_or(FitBudget::Unlimited, FitBudget::Seconds),
-                    cache: cache.as_ref(),
+                let plan = |budget| {
+                    let aim = Aim {
+                        observer: spectral.observer,
+                        space: spectral.space,
+                        opts,
+                        budget,
+                        cache: cache.as_ref(),
+                    };
+                    // Never called: a budget that is unlimited or given weighs no frames.
+                    let frame_s = |_: &Quadrature| Ok(0.0);
+                    let work = Workload {
+                        frames: 1,
+                        frame_s: &frame_s,
+                    };
+                    scene.plan_quadrature(&aim, &work, &report)
                 };
-                // Never called: a budget that is unlimited or given weighs no frames.
-                let frame_s = |_: &Quadrature| Ok(0.0);
-                let work = Workload {
-                    frames: 1,
-                    frame_s: &frame_s,
-                };
-                let p = scene.plan_quadrature(&aim, &work, &report)?;
-                Ok(p.selection)
+                if let Some(s) = args.fit_budget {
+                    return Ok(plan(FitBudget::Seconds(s))?.selection);
+                }
+                let quick = plan(FitBudget::Seconds(INTERIM_S))?;
+                if quick.plan.source == Source::Fit && !quick.plan.cut_short {
+                    return Ok(quick.selection);
+                }
+                if quick.selection.met && quick.selection.kind == Kind::Scene {
+                    let _ = tx.send(Sent::Interim(Box::new(quick.selection)));
+                    wake();
+                }
+                Ok(plan(FitBudget::Unlimited)?.selection)
             };
-            let _ = tx.send(run());
+            let _ = tx.send(Sent::Final(run().map(Box::new)));
             wake();
         })?;
     Ok(Running {

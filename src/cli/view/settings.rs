@@ -79,7 +79,8 @@ impl Settings {
     }
 
     /// The `specmap render` command that renders what the view shows, to `output`, with
-    /// `fit_range` (the range the view's fit covers) in place of the settings' own.
+    /// `fit_range` (the range the view's fit covers) in place of the settings' own, and a
+    /// fit forced (`--quadrature scene`) where the view fits.
     pub(crate) fn command(&self, output: &str, fit_range: Option<String>) -> String {
         let mut words = vec!["specmap".to_string(), "render".to_string()];
         for (k, v) in &self.pairs {
@@ -91,9 +92,16 @@ impl Settings {
                 words.push(sh(v));
             }
         }
+        // The view fits as long as it takes; a still's plan would weigh the fit against one
+        // frame and might take the uniform grid instead. The command fits as the view did.
+        let fits = self.get("tolerance").is_some() && self.get("quadrature").is_none();
         if let Some(r) = fit_range {
             words.push("--fit-range".into());
             words.push(r);
+            if fits {
+                words.push("--quadrature".into());
+                words.push("scene".into());
+            }
         }
         words.push("-o".into());
         words.push(sh(output));
