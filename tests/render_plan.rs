@@ -12,7 +12,7 @@ fn render(cache: &Path, args: &[&str]) -> (serde_json::Value, String) {
         .arg("render")
         .args(args)
         .arg("--json")
-        .env("XDG_CACHE_HOME", cache)
+        .env("SPECMAP_CACHE_DIR", cache)
         .output()
         .unwrap();
     let err = String::from_utf8_lossy(&out.stderr).into_owned();
@@ -40,7 +40,7 @@ fn ball(dir: &Path, more: &[&str]) -> (serde_json::Value, String) {
 }
 
 fn entries(dir: &Path) -> Vec<std::path::PathBuf> {
-    match std::fs::read_dir(dir.join("cache/specmap/quadrature")) {
+    match std::fs::read_dir(dir.join("cache/quadrature")) {
         Ok(d) => d.map(|e| e.unwrap().path()).collect(),
         Err(_) => Vec::new(),
     }
@@ -264,7 +264,7 @@ fn colour_fits_are_cached_too() {
             ])
             .args(more)
             .arg("--json")
-            .env("XDG_CACHE_HOME", dir.path())
+            .env("SPECMAP_CACHE_DIR", dir.path())
             .output()
             .unwrap();
         assert!(out.status.success());

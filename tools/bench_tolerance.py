@@ -52,11 +52,13 @@ def cases(quick):
 
 
 def run(args, cache, tmp):
-    """One `specmap render ARGS --json` with its cache in `cache`: (seconds, report)."""
+    """One `specmap render ARGS --json` with its cache in `cache`: (seconds, report). The cache
+    is set by SPECMAP_CACHE_DIR, not XDG_CACHE_HOME: Mesa keeps its compiled shaders there, and an
+    empty one would add lavapipe's shader compilation (about 2 s) to every run."""
     cmd = [str(BIN), "render", *args, "-o", str(tmp / "out.png"), "--json"]
     t0 = time.perf_counter()
     p = subprocess.run(cmd, capture_output=True, text=True,
-                       env={**os.environ, "XDG_CACHE_HOME": str(cache)})
+                       env={**os.environ, "SPECMAP_CACHE_DIR": str(cache)})
     s = time.perf_counter() - t0
     if p.returncode != 0:
         sys.exit(f"{' '.join(cmd)} failed:\n{p.stderr}")
@@ -94,7 +96,7 @@ def case_row(preset, light, backend, size, repeats, tmp, fills):
         "warm_source": wr["quadrature_plan"]["source"],
         "cold_ratio": cold["median"] / uniform["median"],
         "warm_speedup": uniform["median"] / warm["median"],
-        "image_max": (wr["quadrature_choice"].get("image") or {}).get("max_dE2000"),
+        "image_max": (wr["quadrature_choice"].get("image") or {}).get("max_de2000"),
     }
 
 

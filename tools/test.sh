@@ -78,8 +78,8 @@ mkdir -p "$XDG_RUNTIME_DIR" && chmod 700 "$XDG_RUNTIME_DIR"
 export SPECMAP_REQUIRE_GPU=1
 # The suite's fits are stored in a cache of its own, made fresh each run: never in the user's,
 # and never one a run before it filled.
-export XDG_CACHE_HOME="$(mktemp -d "${TMPDIR:-/tmp}/specmap-test-cache.XXXXXX")"
-trap 'rm -rf "$XDG_CACHE_HOME"' EXIT
+export SPECMAP_CACHE_DIR="$(mktemp -d "${TMPDIR:-/tmp}/specmap-test-cache.XXXXXX")"
+trap 'rm -rf "$SPECMAP_CACHE_DIR"' EXIT
 
 step "Python venv for the interop tests (.venv)"
 if ! .venv/bin/python -c "import colour, tmm, OpenEXR, pytest, scipy, mitsuba" 2>/dev/null \

@@ -455,9 +455,15 @@ pub fn run(mut a: RenderArgs) -> anyhow::Result<()> {
     } else {
         Backend::Cpu
     };
+    // The first frame: what a frame's cost is measured on (and, on the CPU, prepared once).
+    let first = match &sequence {
+        Some(seq) => seq.frame(&scene, 0)?,
+        None => scene.clone(),
+    };
     let serving = super::tolerance::Serving {
         gpu: gpu.as_ref(),
         frames: sequence.as_ref().map_or(1, Sequence::frames),
+        first: &first,
     };
     // The scene the quadrature must hold for: every frame's, and the view's range.
     let mut fit_scene = match &sequence {
@@ -469,6 +475,7 @@ pub fn run(mut a: RenderArgs) -> anyhow::Result<()> {
     }
     let chosen = super::tolerance::quadrature_for(&fit_scene, &spectral, &a, &serving)?;
     let (quadrature, selection, plan) = (chosen.quadrature, chosen.selection, chosen.plan);
+    let mut measured = chosen.prepared;
     let adapter = gpu.as_ref().map(|g| g.adapter());
 
     if let Some(counts) = &a.sweep {
@@ -525,7 +532,7 @@ pub fn run(mut a: RenderArgs) -> anyhow::Result<()> {
     if let Some(seq) = &sequence {
         let t0 = Instant::now();
         let frames = seq.render(
-            &scene,
+            (&scene, measured),
             &quadrature,
             spectral.space,
             gpu.as_ref(),
@@ -541,7 +548,10 @@ pub fn run(mut a: RenderArgs) -> anyhow::Result<()> {
         return report.emit(&scene, a.json, backend, gpu.as_ref().map(|g| g.adapter()));
     }
     let t0 = Instant::now();
-    let prepared = Prepared::with_quadrature(&scene, &quadrature, spectral.space)?;
+    let prepared = match measured.take() {
+        Some(p) => p,
+        None => Prepared::with_quadrature(&scene, &quadrature, spectral.space)?,
+    };
     let prepare_s = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
     let (image, gpu_timing) = match &gpu {

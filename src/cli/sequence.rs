@@ -96,7 +96,7 @@ impl Sequence {
     }
 
     /// Frame `k`'s scene, from `base` (as built: not orbited, films at their ranges' starts).
-    fn frame(&self, base: &Scene, k: usize) -> anyhow::Result<Scene> {
+    pub(crate) fn frame(&self, base: &Scene, k: usize) -> anyhow::Result<Scene> {
         let mut s = base.clone();
         match *self {
             Sequence::Turntable { start, .. } => s.orbit(Orbit {
@@ -132,10 +132,11 @@ impl Sequence {
     }
 
     /// Draws every frame of `base` on `q` (on `gpu`, else the CPU) and writes it next to
-    /// `output`, with a progress bar on a terminal.
+    /// `output`, with a progress bar on a terminal; `first` is frame 0 prepared already, if it
+    /// was.
     pub(crate) fn render(
         &self,
-        base: &Scene,
+        (base, mut first): (&Scene, Option<Prepared>),
         q: &Quadrature,
         space: RgbSpace,
         gpu: Option<&Gpu>,
@@ -155,7 +156,10 @@ impl Sequence {
         for k in 0..n {
             let scene = self.frame(base, k)?;
             let t0 = Instant::now();
-            let p = Prepared::with_quadrature(&scene, q, space)?;
+            let p = match first.take() {
+                Some(p) => p,
+                None => Prepared::with_quadrature(&scene, q, space)?,
+            };
             let prepare_s = t0.elapsed().as_secs_f64();
             let t1 = Instant::now();
             let image = match gpu {

@@ -17,18 +17,22 @@ use specmap::render::{cpu, Scene, Spectral};
 use std::io::IsTerminal;
 use std::time::Instant;
 
-/// What the quadrature is chosen for: the renderer that will draw (None: the CPU) and how many
-/// frames.
+/// What the quadrature is chosen for: the renderer that will draw (None: the CPU), how many
+/// frames, and the first of them (a frame's cost is measured on it).
 pub(crate) struct Serving<'a> {
     pub gpu: Option<&'a Gpu>,
     pub frames: usize,
+    pub first: &'a Scene,
 }
 
-/// The quadrature chosen, what `--tolerance` chose (and how, when it planned).
+/// The quadrature chosen, what `--tolerance` chose (and how, when it planned), and the first
+/// frame prepared on it where measuring its cost did that already (on the CPU, when the plan
+/// keeps the uniform grid it measured).
 pub(crate) struct Chosen {
     pub quadrature: Quadrature,
     pub selection: Option<Selection>,
     pub plan: Option<Plan>,
+    pub prepared: Option<Prepared>,
 }
 
 /// The quadrature of `--quadrature`, `--tolerance` (and `--max-nodes`, `--fit-budget`),
@@ -44,6 +48,7 @@ pub(crate) fn quadrature_for(
         quadrature,
         selection: None,
         plan: None,
+        prepared: None,
     };
     let Some(tolerance) = a.tolerance else {
         return Ok(match kind {
@@ -89,18 +94,19 @@ pub(crate) fn quadrature_for(
                 quadrature: s.quadrature.clone(),
                 selection: Some(s),
                 plan: None,
+                prepared: None,
             }
         }
         Some(QuadratureArg::Scene) | None => {
-            let cache = (!a.no_cache).then(Cache::in_user_folder).flatten();
-            let aim = Aim {
-                observer: spectral.observer,
-                space: spectral.space,
-                opts,
-                budget,
-                cache: cache.as_ref(),
+            let cache = user_cache(a.no_cache);
+            let aim = aim(spectral, opts, budget, cache.as_ref());
+            let kept = std::cell::RefCell::new(None);
+            let frame_s = |q: &Quadrature| {
+                let (seconds, prepared) =
+                    frame_seconds(serving.first, q, spectral.space, serving.gpu)?;
+                *kept.borrow_mut() = prepared.map(|p| (q.clone(), p));
+                Ok(seconds)
             };
-            let frame_s = |q: &Quadrature| frame_seconds(scene, q, spectral.space, serving.gpu);
             let work = Workload {
                 frames: serving.frames,
                 frame_s: &frame_s,
@@ -109,14 +115,40 @@ pub(crate) fn quadrature_for(
             if let Some(note) = &p.plan.cache_note {
                 eprintln!("note: quadrature cache: {note}");
             }
+            let prepared = kept
+                .take()
+                .filter(|(q, _)| *q == p.selection.quadrature)
+                .map(|(_, prepared)| prepared);
             Chosen {
                 quadrature: p.selection.quadrature.clone(),
                 selection: Some(p.selection),
                 plan: Some(p.plan),
+                prepared,
             }
         }
     };
     Ok(chosen)
+}
+
+/// The user's quadrature cache, unless `--no-cache`.
+pub(crate) fn user_cache(no_cache: bool) -> Option<Cache> {
+    (!no_cache).then(Cache::in_user_folder).flatten()
+}
+
+/// What the plan aims at: `spectral`'s observer and space, `opts`, the fit's `budget`, `cache`.
+pub(crate) fn aim<'a>(
+    spectral: &Spectral,
+    opts: Options,
+    budget: FitBudget,
+    cache: Option<&'a Cache>,
+) -> Aim<'a> {
+    Aim {
+        observer: spectral.observer,
+        space: spectral.space,
+        opts,
+        budget,
+        cache,
+    }
 }
 
 /// A spinner on a terminal saying what the choice is doing, stage by stage (a scene's fit
@@ -158,14 +190,15 @@ impl Drop for Spinner {
 }
 
 /// Seconds to prepare and draw one frame of `scene` on `q`, measured on a sample: on the CPU,
-/// rows spread over the image, about [`CPU_SAMPLE`] pixels; on the GPU, the image at a quarter of its
-/// width and height. The draw's time is scaled up by the pixels left out.
+/// rows spread over the image, about [`CPU_SAMPLE`] pixels; on the GPU, the image at a quarter
+/// of its width and height. The draw's time is scaled up by the pixels left out. On the CPU the
+/// frame prepared is returned too (drawn on `q` after all, it is not prepared twice).
 fn frame_seconds(
     scene: &Scene,
     q: &Quadrature,
     space: RgbSpace,
     gpu: Option<&Gpu>,
-) -> specmap::error::Result<f64> {
+) -> specmap::error::Result<(f64, Option<Prepared>)> {
     let pixels = (scene.width * scene.height) as f64;
     let t0 = Instant::now();
     match gpu {
@@ -185,7 +218,10 @@ fn frame_seconds(
             let t1 = Instant::now();
             cpu::render_pixels(&p, &at);
             let draw_s = t1.elapsed().as_secs_f64();
-            Ok(prepare_s + draw_s * pixels / at.len().max(1) as f64)
+            Ok((
+                prepare_s + draw_s * pixels / at.len().max(1) as f64,
+                Some(p),
+            ))
         }
         Some(g) => {
             let mut small = scene.clone();
@@ -196,7 +232,8 @@ fn frame_seconds(
             let t1 = Instant::now();
             g.render(&p)?;
             let draw_s = t1.elapsed().as_secs_f64();
-            Ok(prepare_s + draw_s * pixels / (small.width * small.height) as f64)
+            let s = prepare_s + draw_s * pixels / (small.width * small.height) as f64;
+            Ok((s, None))
         }
     }
 }

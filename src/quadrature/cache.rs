@@ -2,7 +2,8 @@
 //! scene at the same tolerance chooses the same wavelengths every time.
 //!
 //! An entry is one JSON file, `<key>.json`, in the user's cache folder
-//! (`$XDG_CACHE_HOME/specmap/quadrature/`, else `~/.cache/specmap/quadrature/`). The key is a
+//! (`$SPECMAP_CACHE_DIR/quadrature/`, else `$XDG_CACHE_HOME/specmap/quadrature/`, else
+//! `~/.cache/specmap/quadrature/`). The key is a
 //! BLAKE3 hash of everything that determines the choice (the caller hashes its scene; [`Key`]
 //! adds specmap's version and the fit's options). An entry is written through a temporary file
 //! and renamed, so two runs writing the same key at once leave one whole entry, never a torn
@@ -85,16 +86,20 @@ pub struct Cache {
 }
 
 impl Cache {
-    /// The user's cache folder for quadratures: `$XDG_CACHE_HOME/specmap/quadrature`, else
-    /// `$HOME/.cache/specmap/quadrature`; None where neither variable is set.
+    /// The user's cache folder for quadratures: `$SPECMAP_CACHE_DIR/quadrature` (specmap's
+    /// caches alone elsewhere, leaving other programs' caches where they are), else
+    /// `$XDG_CACHE_HOME/specmap/quadrature`, else `$HOME/.cache/specmap/quadrature`; None where
+    /// no such variable is set.
     pub fn in_user_folder() -> Option<Cache> {
         let var = |k: &str| {
             std::env::var_os(k)
                 .filter(|v| !v.is_empty())
                 .map(PathBuf::from)
         };
-        let base = var("XDG_CACHE_HOME").or_else(|| var("HOME").map(|h| h.join(".cache")))?;
-        Some(Cache::at(base.join("specmap").join("quadrature")))
+        let base = var("SPECMAP_CACHE_DIR")
+            .or_else(|| var("XDG_CACHE_HOME").map(|x| x.join("specmap")))
+            .or_else(|| var("HOME").map(|h| h.join(".cache").join("specmap")))?;
+        Some(Cache::at(base.join("quadrature")))
     }
 
     /// The entries in `dir`.

@@ -8,11 +8,10 @@
 
 use crate::cli::render::{QuadratureArg, RenderArgs};
 use crate::cli::tolerance::tolerance_options;
-use specmap::quadrature::cache::Cache;
 use specmap::quadrature::choose::{Family, Selection};
 use specmap::quadrature::Kind;
 use specmap::quadrature::Quadrature;
-use specmap::render::plan::{Aim, FitBudget, Source, Workload};
+use specmap::render::plan::{FitBudget, Source, Workload};
 use specmap::render::{Film, Scene};
 use std::sync::mpsc::{channel, Receiver};
 use std::sync::{Arc, Mutex};
@@ -235,15 +234,9 @@ pub(crate) fn start(
                 // The scene's fit: from the cache where an earlier view or render made it, else
                 // fitted and stored. Without --fit-budget, first within INTERIM_S seconds (the
                 // view draws with its set at once), then for as long as it takes.
-                let cache = (!args.no_cache).then(Cache::in_user_folder).flatten();
+                let cache = crate::cli::tolerance::user_cache(args.no_cache);
                 let plan = |budget| {
-                    let aim = Aim {
-                        observer: spectral.observer,
-                        space: spectral.space,
-                        opts,
-                        budget,
-                        cache: cache.as_ref(),
-                    };
+                    let aim = crate::cli::tolerance::aim(&spectral, opts, budget, cache.as_ref());
                     // Never called: a budget that is unlimited or given weighs no frames.
                     let frame_s = |_: &Quadrature| Ok(0.0);
                     let work = Workload {
