@@ -208,26 +208,39 @@ impl Scene {
                 return Ok((uniform, Some(Some(s))));
             }
             FitBudget::Auto => {
+                // The fit's last check renders the image's lattice at 1 nm: in frames, about
+                // 401 / n times the lattice's share of the pixels. Where a tenth of the frames
+                // cannot pay for that alone, no fit can pay, and no frame is measured.
+                let n = uniform.quadrature.len() as f64;
+                let share = self.image_check_pixels() as f64 / (self.width * self.height) as f64;
+                let check_frames = IMAGE_CHECK_NODES / n * share;
+                if FIT_SHARE * (work.frames as f64) < check_frames {
+                    plan.reason = format!(
+                        "a fit would cost more than it saves: its check of the image alone (401 \
+                         wavelengths on {:.1}% of the pixels) costs about {check_frames:.2} frames \
+                         of the uniform grid of {}, more than {:.0}% of {}",
+                        100.0 * share,
+                        uniform.quadrature.len(),
+                        100.0 * FIT_SHARE,
+                        frames_word(work.frames)
+                    );
+                    return Ok((no_fit(uniform), None));
+                }
                 let t1 = Instant::now();
                 let frame = (work.frame_s)(&uniform.quadrature)?;
                 let measure_s = t1.elapsed().as_secs_f64();
                 let path = work.frames as f64 * frame;
                 plan.uniform_path_s = Some(path);
                 // The uniform path gathers the spectra too; measuring the frame is extra, and
-                // so is the fit's last check, the image's lattice at 1 nm (401 nodes), which
-                // runs after the search: the search stops in time for it.
-                let n = uniform.quadrature.len() as f64;
-                let share = self.image_check_pixels() as f64 / (self.width * self.height) as f64;
-                let check_s = frame * IMAGE_CHECK_NODES / n * share;
+                // so is the fit's last check, which runs after the search: the search stops in
+                // time for it.
+                let check_s = frame * check_frames;
                 plan.image_check_s = Some(check_s);
                 FIT_SHARE * (path + gather_s) - measure_s - check_s
             }
         };
         plan.fit_budget_s = Some(budget.max(0.0));
-        let frames = match work.frames {
-            1 => "1 frame".to_string(),
-            n => format!("{n} frames"),
-        };
+        let frames = frames_word(work.frames);
         let path = plan.uniform_path_s.unwrap_or(0.0);
         let n = uniform.quadrature.len();
         // A fit gathers the spectra again before it can add a node.
@@ -248,10 +261,22 @@ impl Scene {
             budget.max(0.0),
             2.0 * gather_s
         );
-        let mut uniform = uniform;
-        uniform.reason =
-            "the cheapest uniform grid that meets the target (no fit: see the plan)".into();
-        Ok((uniform, None))
+        Ok((no_fit(uniform), None))
+    }
+}
+
+/// The uniform choice, its reason saying why no fit ran.
+fn no_fit(mut uniform: Selection) -> Selection {
+    uniform.reason =
+        "the cheapest uniform grid that meets the target (no fit: see the plan)".into();
+    uniform
+}
+
+/// "1 frame", "36 frames".
+fn frames_word(n: usize) -> String {
+    match n {
+        1 => "1 frame".to_string(),
+        n => format!("{n} frames"),
     }
 }
 
