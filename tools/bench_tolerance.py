@@ -150,6 +150,7 @@ def main():
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--frames", type=int, default=36)
     ap.add_argument("--turntables", default="ball:D65,cylinders:D65,checker-spheres:sunrise.exr")
+    ap.add_argument("--cases", default=None, help="PRESET:LIGHT,... instead of every case")
     ap.add_argument("--out", default=None, help="markdown table (a .json beside it)")
     a = ap.parse_args()
     if not BIN.exists():
@@ -160,7 +161,9 @@ def main():
     rows, turns, fills = [], [], {}
     try:
         for backend in a.backends.split(","):
-            for preset, light in cases(a.quick):
+            chosen = ([tuple(c.split(":")) for c in a.cases.split(",")] if a.cases
+                      else cases(a.quick))
+            for preset, light in chosen:
                 r = case_row(preset, light, backend, a.size, repeats, tmp, fills)
                 print(json.dumps(r), file=sys.stderr, flush=True)
                 rows.append(r)

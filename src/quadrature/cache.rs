@@ -180,6 +180,13 @@ impl Cache {
     }
 }
 
+/// A colour error as stored: JSON has no infinity, so an error that was not finite (a uniform
+/// grid that misses a lamp's line entirely) is written as null, and read back as infinite.
+pub fn error_or_infinite<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    let v: Option<f64> = serde::Deserialize::deserialize(d)?;
+    Ok(v.unwrap_or(f64::INFINITY))
+}
+
 impl Entry {
     /// Why an entry read for `key` is not to be trusted, if it is not.
     fn foreign(&self, key: &Key) -> Option<String> {
@@ -247,6 +254,22 @@ mod tests {
             RgbSpace::SRGB,
         );
         assert_ne!(other, k);
+    }
+
+    /// A grid that misses a lamp's line errs without bound; JSON writes that as null, and it
+    /// reads back as infinite (the chart under low-pressure sodium at 20 nm).
+    #[test]
+    fn an_error_without_bound_reads_back_as_infinite() {
+        let dir = tempfile::tempdir().unwrap();
+        let cache = Cache::at(dir.path());
+        let k = key(b"scene", 1.0);
+        let mut s = selection();
+        s.uniform.tried[0].max = f64::INFINITY;
+        cache.put(&k, &s, None, true).unwrap();
+        let Lookup::Hit(back, _) = cache.get(&k, None) else {
+            panic!("not read back")
+        };
+        assert_eq!(back.uniform.tried[0].max, f64::INFINITY);
     }
 
     #[test]

@@ -27,6 +27,7 @@ pub struct UniformTried {
     pub samples: usize,
     pub rule: Rule,
     #[serde(rename = "max_dE2000")]
+    #[serde(deserialize_with = "crate::quadrature::cache::error_or_infinite")]
     pub max: f64,
 }
 
@@ -37,6 +38,7 @@ pub struct UniformChoice {
     pub grid: String,
     pub rule: Rule,
     pub samples: usize,
+    #[serde(deserialize_with = "crate::quadrature::cache::error_or_infinite")]
     pub estimate_de2000: f64,
     pub met: bool,
     /// The best rule of every step tried, coarsest first.
@@ -66,6 +68,7 @@ pub struct Selection {
     #[serde(rename = "max_nodes")]
     pub budget: Option<usize>,
     /// The chosen quadrature's largest error over the fit and held-out stimuli.
+    #[serde(deserialize_with = "crate::quadrature::cache::error_or_infinite")]
     pub estimate_de2000: f64,
     pub met: bool,
     /// Why this one.
@@ -88,7 +91,9 @@ pub struct Selection {
 /// its pixels (every `stride`-th row and column, each block's centre).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ImageCheck {
+    #[serde(deserialize_with = "crate::quadrature::cache::error_or_infinite")]
     pub max_de2000: f64,
+    #[serde(deserialize_with = "crate::quadrature::cache::error_or_infinite")]
     pub mean_de2000: f64,
     /// The pixel (x, y) of the largest.
     pub max_at: [usize; 2],

@@ -131,8 +131,10 @@ pub fn check_tolerance(tolerance: f64) -> Result<()> {
 pub struct Tried {
     pub nodes: usize,
     #[serde(rename = "fit_max_dE2000")]
+    #[serde(deserialize_with = "crate::quadrature::cache::error_or_infinite")]
     pub fit_max: f64,
     #[serde(rename = "held_out_max_dE2000")]
+    #[serde(deserialize_with = "crate::quadrature::cache::error_or_infinite")]
     pub held_out_max: f64,
 }
 
@@ -144,12 +146,16 @@ pub struct Choice {
     /// `margin * tolerance`, what the estimate had to meet.
     pub target_de2000: f64,
     /// The largest error over the fit set and the held-out set: the estimate.
+    #[serde(deserialize_with = "crate::quadrature::cache::error_or_infinite")]
     pub estimate_de2000: f64,
     #[serde(rename = "fit_max_dE2000")]
+    #[serde(deserialize_with = "crate::quadrature::cache::error_or_infinite")]
     pub fit_max: f64,
     #[serde(rename = "held_out_max_dE2000")]
+    #[serde(deserialize_with = "crate::quadrature::cache::error_or_infinite")]
     pub held_out_max: f64,
     #[serde(rename = "held_out_mean_dE2000")]
+    #[serde(deserialize_with = "crate::quadrature::cache::error_or_infinite")]
     pub held_out_mean: f64,
     /// The stimulus with the largest error.
     pub worst: String,
