@@ -124,6 +124,20 @@ fn a_fit_cut_short_by_its_budget_says_so_and_the_image_meets_the_tolerance() {
     if let Some(image) = c["image"]["max_dE2000"].as_f64() {
         assert!(image <= 0.5, "{image}");
     }
+    // Stored, marked cut short: a run with no more time reuses it, a longer one fits again.
+    let (stored, _) = ball(dir.path(), &["--fit-budget", "0"]);
+    assert_eq!(stored["quadrature_plan"]["source"], "fit");
+    let (again, _) = ball(dir.path(), &["--fit-budget", "0"]);
+    assert_eq!(again["quadrature_plan"]["source"], "cache");
+    assert_eq!(again["quadrature"], stored["quadrature"]);
+    let (longer, err) = ball(dir.path(), &["--fit-budget", "60"]);
+    assert_eq!(longer["quadrature_plan"]["source"], "fit");
+    assert!(err.contains("cut short"), "{err}");
+    assert_eq!(longer["quadrature_plan"]["cut_short"], false);
+    // Then complete: every run reuses it, whatever its budget.
+    let (last, _) = ball(dir.path(), &["--fit-budget", "0"]);
+    assert_eq!(last["quadrature_plan"]["source"], "cache");
+    assert_eq!(last["quadrature"], longer["quadrature"]);
     for bad in ["--fit-budget=-1", "--fit-budget=nan"] {
         let out = Command::new(env!("CARGO_BIN_EXE_specmap"))
             .args(["render", "--tolerance", "0.5", bad])

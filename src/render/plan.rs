@@ -125,29 +125,34 @@ impl Scene {
             cache_file: None,
             cache_note: None,
         };
+        // A fit cut short by its budget serves a run with no more time than it had: under
+        // FitBudget::Auto that is known once the frame is measured, so such an entry is looked
+        // at again then (and serves a run with up to twice its time).
         let fixed = match aim.budget {
             FitBudget::Seconds(s) => Some(s),
             _ => None,
         };
-        if let Some(cache) = aim.cache {
-            match cache.get(&key, fixed) {
-                Lookup::Hit(selection, file) => {
-                    plan.reason = "the scene's fit at this tolerance, from the cache".into();
-                    plan.cache_file = Some(file);
-                    plan.seconds = t0.elapsed().as_secs_f64();
-                    return Ok(Planned {
-                        selection: *selection,
-                        plan,
-                    });
-                }
-                Lookup::Miss(note) => plan.cache_note = note,
-                Lookup::Ignored(file, why) => {
-                    plan.cache_note = Some(format!("ignored {}: it {why}", file.display()))
-                }
-            }
+        if let Some(hit) = look_up(aim.cache, &key, fixed, &mut plan) {
+            plan.seconds = t0.elapsed().as_secs_f64();
+            return Ok(Planned {
+                selection: hit,
+                plan,
+            });
         }
         let (uniform, budget) = self.weigh(aim, work, &mut plan, report)?;
         let Some(budget) = budget else {
+            // No fit pays; one cut short by a budget before costs nothing now.
+            let reason = std::mem::take(&mut plan.reason);
+            if plan.cache_note.is_some() {
+                if let Some(hit) = look_up(aim.cache, &key, Some(0.0), &mut plan) {
+                    plan.seconds = t0.elapsed().as_secs_f64();
+                    return Ok(Planned {
+                        selection: hit,
+                        plan,
+                    });
+                }
+            }
+            plan.reason = reason;
             plan.source = Source::Uniform;
             plan.seconds = t0.elapsed().as_secs_f64();
             return Ok(Planned {
@@ -155,6 +160,20 @@ impl Scene {
                 plan,
             });
         };
+        if aim.budget == FitBudget::Auto && plan.cache_note.is_some() {
+            // A fit cut short at half this budget or more is as good as this run would make:
+            // the measured frame, and so the budget, varies that much from run to run (28 s
+            // and 46 s for the same 36 frames), and a fit improves slowly with time.
+            let reason = std::mem::take(&mut plan.reason);
+            if let Some(hit) = look_up(aim.cache, &key, budget.map(|b| b / 2.0), &mut plan) {
+                plan.seconds = t0.elapsed().as_secs_f64();
+                return Ok(Planned {
+                    selection: hit,
+                    plan,
+                });
+            }
+            plan.reason = reason;
+        }
         let opts = aim.opts.within_seconds(budget);
         let fitted = self.choose_quadrature_reporting(
             aim.observer,
@@ -165,14 +184,16 @@ impl Scene {
         )?;
         plan.cut_short = opts.out_of_time();
         plan.source = Source::Fit;
+        let selection = cheaper(fitted, uniform, &mut plan);
         if let Some(cache) = aim.cache {
-            // A cache that cannot be written costs the next run a fit, nothing more.
-            match cache.put(&key, &fitted, budget, !plan.cut_short) {
+            // What was chosen is stored (the uniform grid where a fit cut short missed), marked
+            // whether the budget cut the fit short. A cache that cannot be written costs the
+            // next run a fit, nothing more.
+            match cache.put(&key, &selection, budget, !plan.cut_short) {
                 Ok(file) => plan.cache_file = Some(file),
                 Err(e) => plan.cache_note = Some(format!("not stored: {e}")),
             }
         }
-        let selection = cheaper(fitted, uniform, &mut plan);
         plan.seconds = t0.elapsed().as_secs_f64();
         Ok(Planned { selection, plan })
     }
@@ -207,37 +228,10 @@ impl Scene {
                 plan.fit_budget_s = Some(s);
                 return Ok((uniform, Some(Some(s))));
             }
-            FitBudget::Auto => {
-                // The fit's last check renders the image's lattice at 1 nm: in frames, about
-                // 401 / n times the lattice's share of the pixels. Where a tenth of the frames
-                // cannot pay for that alone, no fit can pay, and no frame is measured.
-                let n = uniform.quadrature.len() as f64;
-                let share = self.image_check_pixels() as f64 / (self.width * self.height) as f64;
-                let check_frames = IMAGE_CHECK_NODES / n * share;
-                if FIT_SHARE * (work.frames as f64) < check_frames {
-                    plan.reason = format!(
-                        "a fit would cost more than it saves: its check of the image alone (401 \
-                         wavelengths on {:.1}% of the pixels) costs about {check_frames:.2} frames \
-                         of the uniform grid of {}, more than {:.0}% of {}",
-                        100.0 * share,
-                        uniform.quadrature.len(),
-                        100.0 * FIT_SHARE,
-                        frames_word(work.frames)
-                    );
-                    return Ok((no_fit(uniform), None));
-                }
-                let t1 = Instant::now();
-                let frame = (work.frame_s)(&uniform.quadrature)?;
-                let measure_s = t1.elapsed().as_secs_f64();
-                let path = work.frames as f64 * frame;
-                plan.uniform_path_s = Some(path);
-                // The uniform path gathers the spectra too; measuring the frame is extra, and
-                // so is the fit's last check, which runs after the search: the search stops in
-                // time for it.
-                let check_s = frame * check_frames;
-                plan.image_check_s = Some(check_s);
-                FIT_SHARE * (path + gather_s) - measure_s - check_s
-            }
+            FitBudget::Auto => match self.auto_budget(&uniform, work, gather_s, plan)? {
+                Some(b) => b,
+                None => return Ok((no_fit(uniform), None)),
+            },
         };
         plan.fit_budget_s = Some(budget.max(0.0));
         let frames = frames_word(work.frames);
@@ -262,6 +256,75 @@ impl Scene {
             2.0 * gather_s
         );
         Ok((no_fit(uniform), None))
+    }
+}
+
+impl Scene {
+    /// [`FitBudget::Auto`]'s budget for the search, in seconds, with the `uniform` choice made
+    /// in `gather_s`: [`FIT_SHARE`] of the uniform path's predicted time for `work`, less the
+    /// time measuring a frame took and the fit's last check will take. None where even a tenth
+    /// of the frames cannot pay for that check (no frame is measured then; the plan says why).
+    fn auto_budget(
+        &self,
+        uniform: &Selection,
+        work: &Workload,
+        gather_s: f64,
+        plan: &mut Plan,
+    ) -> Result<Option<f64>> {
+        // The fit's last check renders the image's lattice at 1 nm: in frames, about 401 / n
+        // times the lattice's share of the pixels.
+        let n = uniform.quadrature.len() as f64;
+        let share = self.image_check_pixels() as f64 / (self.width * self.height) as f64;
+        let check_frames = IMAGE_CHECK_NODES / n * share;
+        if FIT_SHARE * (work.frames as f64) < check_frames {
+            plan.reason = format!(
+                "a fit would cost more than it saves: its check of the image alone (401 \
+                 wavelengths on {:.1}% of the pixels) costs about {check_frames:.2} frames of \
+                 the uniform grid of {}, more than {:.0}% of {}",
+                100.0 * share,
+                uniform.quadrature.len(),
+                100.0 * FIT_SHARE,
+                frames_word(work.frames)
+            );
+            return Ok(None);
+        }
+        let t1 = Instant::now();
+        let frame = (work.frame_s)(&uniform.quadrature)?;
+        let measure_s = t1.elapsed().as_secs_f64();
+        let path = work.frames as f64 * frame;
+        plan.uniform_path_s = Some(path);
+        // The uniform path gathers the spectra too; measuring the frame is extra, and so is the
+        // fit's last check, which runs after the search: the search stops in time for it.
+        let check_s = frame * check_frames;
+        plan.image_check_s = Some(check_s);
+        Ok(Some(FIT_SHARE * (path + gather_s) - measure_s - check_s))
+    }
+}
+
+/// The entry of `key` in `cache` for a run that may fit for `budget_s` seconds (None: as long as
+/// it takes), noting in `plan` what was found.
+fn look_up(
+    cache: Option<&Cache>,
+    key: &Key,
+    budget_s: Option<f64>,
+    plan: &mut Plan,
+) -> Option<Selection> {
+    match cache?.get(key, budget_s) {
+        Lookup::Hit(selection, file) => {
+            plan.source = Source::Cache;
+            plan.reason = "the scene's fit at this tolerance, from the cache".into();
+            plan.cache_file = Some(file);
+            plan.cache_note = None;
+            Some(*selection)
+        }
+        Lookup::Miss(note) => {
+            plan.cache_note = note;
+            None
+        }
+        Lookup::Ignored(file, why) => {
+            plan.cache_note = Some(format!("ignored {}: it {why}", file.display()));
+            None
+        }
     }
 }
 
