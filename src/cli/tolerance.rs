@@ -100,34 +100,45 @@ pub(crate) fn quadrature_for(
         Some(QuadratureArg::Scene) | None => {
             let cache = user_cache(a.no_cache);
             let aim = aim(spectral, opts, budget, cache.as_ref());
-            let kept = std::cell::RefCell::new(None);
-            let frame_s = |q: &Quadrature| {
-                let (seconds, prepared) =
-                    frame_seconds(serving.first, q, spectral.space, serving.gpu)?;
-                *kept.borrow_mut() = prepared.map(|p| (q.clone(), p));
-                Ok(seconds)
-            };
-            let work = Workload {
-                frames: serving.frames,
-                frame_s: &frame_s,
-            };
-            let p = scene.plan_quadrature(&aim, &work, &report)?;
-            if let Some(note) = &p.plan.cache_note {
-                eprintln!("note: quadrature cache: {note}");
-            }
-            let prepared = kept
-                .take()
-                .filter(|(q, _)| *q == p.selection.quadrature)
-                .map(|(_, prepared)| prepared);
-            Chosen {
-                quadrature: p.selection.quadrature.clone(),
-                selection: Some(p.selection),
-                plan: Some(p.plan),
-                prepared,
-            }
+            planned(scene, &aim, spectral.space, serving, &report)?
         }
     };
     Ok(chosen)
+}
+
+/// The plan's choice for `scene` at `aim`, each frame's cost measured on `serving`'s first
+/// frame in `space`, and that frame prepared where the plan keeps the grid it measured.
+fn planned(
+    scene: &Scene,
+    aim: &Aim,
+    space: RgbSpace,
+    serving: &Serving,
+    report: specmap::quadrature::progress::Report,
+) -> anyhow::Result<Chosen> {
+    let kept = std::cell::RefCell::new(None);
+    let frame_s = |q: &Quadrature| {
+        let (seconds, prepared) = frame_seconds(serving.first, q, space, serving.gpu)?;
+        *kept.borrow_mut() = prepared.map(|p| (q.clone(), p));
+        Ok(seconds)
+    };
+    let work = Workload {
+        frames: serving.frames,
+        frame_s: &frame_s,
+    };
+    let p = scene.plan_quadrature(aim, &work, report)?;
+    if let Some(note) = &p.plan.cache_note {
+        eprintln!("note: quadrature cache: {note}");
+    }
+    let prepared = kept
+        .take()
+        .filter(|(q, _)| *q == p.selection.quadrature)
+        .map(|(_, prepared)| prepared);
+    Ok(Chosen {
+        quadrature: p.selection.quadrature.clone(),
+        selection: Some(p.selection),
+        plan: Some(p.plan),
+        prepared,
+    })
 }
 
 /// The user's quadrature cache, unless `--no-cache`.

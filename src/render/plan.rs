@@ -125,54 +125,51 @@ impl Scene {
             cache_file: None,
             cache_note: None,
         };
+        let selection = self.choose_planned(aim, work, &key, &mut plan, report)?;
+        plan.seconds = t0.elapsed().as_secs_f64();
+        Ok(Planned { selection, plan })
+    }
+
+    /// The stages of [`Scene::plan_quadrature`] after the key: the chosen selection, and the
+    /// plan filled in.
+    fn choose_planned(
+        &self,
+        aim: &Aim,
+        work: &Workload,
+        key: &Key,
+        plan: &mut Plan,
+        report: Report,
+    ) -> Result<Selection> {
         // A fit cut short by its budget serves a run with no more time than it had: under
         // FitBudget::Auto that is known once the frame is measured, so such an entry is looked
-        // at again then (and serves a run with up to twice its time).
+        // at again then (and serves a run with up to twice its time). A lookup that misses
+        // leaves the plan's reason as it was.
         let fixed = match aim.budget {
             FitBudget::Seconds(s) => Some(s),
             _ => None,
         };
-        if let Some(hit) = look_up(aim.cache, &key, fixed, &mut plan) {
-            plan.seconds = t0.elapsed().as_secs_f64();
-            return Ok(Planned {
-                selection: hit,
-                plan,
-            });
+        if let Some(hit) = look_up(aim.cache, key, fixed, plan) {
+            return Ok(hit);
         }
-        let (uniform, budget) = self.weigh(aim, work, &mut plan, report)?;
+        let (uniform, budget) = self.weigh(aim, work, plan, report)?;
+        let cut_entry = plan.cache_note.is_some();
         let Some(budget) = budget else {
             // No fit pays; one cut short by a budget before costs nothing now.
-            let reason = std::mem::take(&mut plan.reason);
-            if plan.cache_note.is_some() {
-                if let Some(hit) = look_up(aim.cache, &key, Some(0.0), &mut plan) {
-                    plan.seconds = t0.elapsed().as_secs_f64();
-                    return Ok(Planned {
-                        selection: hit,
-                        plan,
-                    });
+            if cut_entry {
+                if let Some(hit) = look_up(aim.cache, key, Some(0.0), plan) {
+                    return Ok(hit);
                 }
             }
-            plan.reason = reason;
             plan.source = Source::Uniform;
-            plan.seconds = t0.elapsed().as_secs_f64();
-            return Ok(Planned {
-                selection: uniform,
-                plan,
-            });
+            return Ok(uniform);
         };
-        if aim.budget == FitBudget::Auto && plan.cache_note.is_some() {
+        if aim.budget == FitBudget::Auto && cut_entry {
             // A fit cut short at half this budget or more is as good as this run would make:
             // the measured frame, and so the budget, varies that much from run to run (28 s
             // and 46 s for the same 36 frames), and a fit improves slowly with time.
-            let reason = std::mem::take(&mut plan.reason);
-            if let Some(hit) = look_up(aim.cache, &key, budget.map(|b| b / 2.0), &mut plan) {
-                plan.seconds = t0.elapsed().as_secs_f64();
-                return Ok(Planned {
-                    selection: hit,
-                    plan,
-                });
+            if let Some(hit) = look_up(aim.cache, key, budget.map(|b| b / 2.0), plan) {
+                return Ok(hit);
             }
-            plan.reason = reason;
         }
         let opts = aim.opts.within_seconds(budget);
         let fitted = self.choose_quadrature_reporting(
@@ -184,18 +181,17 @@ impl Scene {
         )?;
         plan.cut_short = opts.out_of_time();
         plan.source = Source::Fit;
-        let selection = cheaper(fitted, uniform, &mut plan);
+        let selection = cheaper(fitted, uniform, plan);
         if let Some(cache) = aim.cache {
             // What was chosen is stored (the uniform grid where a fit cut short missed), marked
             // whether the budget cut the fit short. A cache that cannot be written costs the
             // next run a fit, nothing more.
-            match cache.put(&key, &selection, budget, !plan.cut_short) {
+            match cache.put(key, &selection, budget, !plan.cut_short) {
                 Ok(file) => plan.cache_file = Some(file),
                 Err(e) => plan.cache_note = Some(format!("not stored: {e}")),
             }
         }
-        plan.seconds = t0.elapsed().as_secs_f64();
-        Ok(Planned { selection, plan })
+        Ok(selection)
     }
 
     /// The uniform grid at the tolerance, and the fit's budget in seconds: None where no fit
