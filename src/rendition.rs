@@ -26,7 +26,7 @@
 
 use crate::colorimetry::{cct, delta_e_2000, Cat, Cmfs, Lab, Observer, Xyz, D65_XY};
 use crate::data::Table;
-use crate::envmap::exrio::{read_spectral_info, read_spectral_rows, EnvmapAttr};
+use crate::envmap::files::{read_spectral_info, read_spectral_rows, EnvmapAttr};
 use crate::envmap::layout::{detect, EnvMap, Layout};
 use crate::envmap::RgbImage;
 use crate::error::{Error, Result};

@@ -1,9 +1,9 @@
-//! The basis form (version 2, src/envmap/basis_k.rs) holds the spectra of the spectral form of
+//! The basis form (version 2, src/envmap/convert/basis_form.rs) holds the spectra of the spectral form of
 //! the same conversion: every pixel rebuilt from the header's K spectra and its K coefficients,
 //! against the spectral file's own bands.
 
 use specmap::envmap::convert::{convert, ConvertOptions, OutputFormat};
-use specmap::envmap::exrio::{self, AttrValue, Precision};
+use specmap::envmap::files::{self, AttrValue, Precision};
 use std::path::Path;
 
 /// The basis file's coefficients (per pixel) and spectra, from the file itself.
@@ -16,7 +16,7 @@ fn read_basis(path: &Path) -> (Vec<Vec<f64>>, Vec<Vec<f64>>, Option<usize>) {
             .other
             .iter()
             .find(|(n, _)| **n == *name)
-            .and_then(|(_, v)| exrio::attr_from_exr(v))
+            .and_then(|(_, v)| files::attr_from_exr(v))
             .unwrap_or_else(|| panic!("no attribute {name}"))
     };
     let AttrValue::I32(k) = attr("specmap.basisK") else {
@@ -34,7 +34,7 @@ fn read_basis(path: &Path) -> (Vec<Vec<f64>>, Vec<Vec<f64>>, Option<usize>) {
         .other
         .iter()
         .find(|(n, _)| **n == *"EV")
-        .and_then(|(_, v)| exrio::attr_from_exr(v))
+        .and_then(|(_, v)| files::attr_from_exr(v))
     {
         Some(AttrValue::F32(e)) => e as f64,
         _ => 0.0,
@@ -64,10 +64,10 @@ fn read_basis(path: &Path) -> (Vec<Vec<f64>>, Vec<Vec<f64>>, Option<usize>) {
 /// Per pixel `|rebuilt - bands| / |bands|` over the spectral file.
 fn residuals(spectral: &Path, basis: &Path) -> Vec<f64> {
     let (coef, spectra, _) = read_basis(basis);
-    let info = exrio::read_spectral_info(spectral).unwrap();
+    let info = files::read_spectral_info(spectral).unwrap();
     let (w, n) = (info.width, info.wavelengths_nm.len());
     let mut out = vec![0.0; info.width * info.height];
-    exrio::read_spectral_rows(spectral, |y, row| {
+    files::read_spectral_rows(spectral, |y, row| {
         let per = row.len() / w;
         for x in 0..w {
             let i = y * w + x;

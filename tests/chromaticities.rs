@@ -265,7 +265,7 @@ fn render_reads_an_rgb_environment_in_its_declared_space() {
             out.to_str().unwrap(),
         ]);
         assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
-        specmap::envmap::exrio::read_rgb(&out, None)
+        specmap::envmap::files::read_rgb(&out, None)
             .unwrap()
             .image
             .pixels

@@ -468,7 +468,7 @@ fn the_white_premise_is_chosen_reported_and_recorded() {
     let d = tempfile::tempdir().unwrap();
     // A room lit by a sodium lamp, D65-referenced: the lamp and the walls it lights are orange.
     let input = d.path().join("orange.exr");
-    use specmap::envmap::light::{rgb_of_xy, white_xy};
+    use specmap::envmap::scene::main_light::{rgb_of_xy, white_xy};
     let lamp = rgb_of_xy(
         white_xy("hps").unwrap(),
         &specmap::colorimetry::RgbSpace::SRGB,
@@ -570,7 +570,7 @@ fn a_vertical_strip_converts_as_the_cube_of_the_same_pixels() {
             "float",
         ]);
         assert_eq!(r["input_layout"], layout);
-        specmap::envmap::exrio::read_rgb(&out, None)
+        specmap::envmap::files::read_rgb(&out, None)
             .unwrap()
             .image
             .pixels
@@ -643,7 +643,7 @@ fn the_ev_scale_keeps_the_sun_mask_and_never_flushes_pixels() {
     assert_eq!(r["precision"], "half");
     assert!(r["ev"].as_f64().unwrap() >= 1.0, "{}", r["ev"]);
     assert_eq!(r["sun"]["found"], true, "{}", r["sun"]);
-    let mask = specmap::envmap::exrio::read_stored_channel(&out, "sun").unwrap();
+    let mask = specmap::envmap::files::read_stored_channel(&out, "sun").unwrap();
     assert!(mask.iter().all(|&v| v == 0.0 || v == 1.0));
     assert!(mask.iter().filter(|&&v| v == 1.0).count() >= 1);
     let rt = specmap(&["roundtrip", o, "--json"]);
@@ -679,6 +679,6 @@ fn the_ev_scale_keeps_the_sun_mask_and_never_flushes_pixels() {
         "{}",
         r["notes"]
     );
-    let dark = specmap::envmap::exrio::read_stored_channel(&out, "S0.550,000000nm").unwrap();
+    let dark = specmap::envmap::files::read_stored_channel(&out, "S0.550,000000nm").unwrap();
     assert!(dark.iter().all(|&v| v > 0.0), "no pixel is written as 0");
 }

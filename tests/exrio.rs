@@ -7,7 +7,7 @@ use exr::prelude::{
     f16, read_all_flat_layers_from_file, AnyChannel, AnyChannels, Encoding, FlatSamples, Image,
     Layer, LayerAttributes, SmallVec, WritableImage,
 };
-use specmap::envmap::exrio::{
+use specmap::envmap::files::{
     read_faces, read_rgb, read_spectral_info, read_spectral_rows, spectral_channel_name, AttrValue,
     ChannelSet, Compression, EnvmapAttr, Precision, SpectralLayout, SpectralWriter, FACE_NAMES,
     ZIP_DEFAULT_LEVEL, ZIP_MAX_LEVEL,
@@ -720,7 +720,7 @@ fn envmap_attribute_is_read() {
     assert_eq!(plain.envmap, None);
 }
 
-/// Not a timed test: `cargo test --release --test exrio -- --ignored --nocapture` under
+/// Not a timed test: `cargo test --release --test files -- --ignored --nocapture` under
 /// `/usr/bin/time -v` shows the writer's resident memory on an 8192x4096, 81-band half image.
 #[test]
 #[ignore]

@@ -410,7 +410,7 @@ fn basis_and_spectral_maps_light_the_scene_as_the_rgb_map_does() {
         let out = dir.path().join(format!("{format:?}.exr"));
         let opts = ConvertOptions {
             format,
-            precision: specmap::envmap::exrio::Precision::Float,
+            precision: specmap::envmap::files::Precision::Float,
             ..ConvertOptions::default()
         };
         convert(input, &out, &opts, &|_, _| {}).unwrap();

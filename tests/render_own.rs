@@ -9,7 +9,7 @@ mod common;
 
 use specmap::colorimetry::RgbSpace;
 use specmap::envmap::convert::{convert, ConvertOptions, OutputFormat};
-use specmap::envmap::exrio::Precision;
+use specmap::envmap::files::Precision;
 use specmap::render::own::{load_spectral, Spectra};
 use specmap::render::prepare::Prepared;
 use specmap::render::{compare, cpu, env, Backdrop, Image, Lighting, Preset, Spectral};

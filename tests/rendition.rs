@@ -5,7 +5,7 @@
 
 use specmap::colorimetry::{Cmfs, Observer};
 use specmap::data::Table;
-use specmap::envmap::exrio::{
+use specmap::envmap::files::{
     ChannelSet, Compression, EnvmapAttr, Precision, SpectralLayout, SpectralWriter,
 };
 use specmap::envmap::layout::{EnvMap, Layout};
@@ -72,7 +72,7 @@ fn write_map(
             envmap,
             ev: None,
             attributes: vec![],
-            zip_level: specmap::envmap::exrio::ZIP_DEFAULT_LEVEL,
+            zip_level: specmap::envmap::files::ZIP_DEFAULT_LEVEL,
             unscaled: Vec::new(),
         },
     )
@@ -375,7 +375,7 @@ fn bad_inputs_get_clear_errors() {
             envmap: None,
             ev: None,
             attributes: vec![],
-            zip_level: specmap::envmap::exrio::ZIP_DEFAULT_LEVEL,
+            zip_level: specmap::envmap::files::ZIP_DEFAULT_LEVEL,
             unscaled: Vec::new(),
         },
     )
@@ -437,7 +437,7 @@ fn committed_truth_scenes_through_the_binary() {
     );
     for s in scenes {
         let spectral = truth.join(s["spectral"].as_str().unwrap());
-        let info = specmap::envmap::exrio::read_spectral_info(&spectral).unwrap();
+        let info = specmap::envmap::files::read_spectral_info(&spectral).unwrap();
         let end = if s["name"].as_str().unwrap().starts_with("sky_") {
             720.0
         } else {

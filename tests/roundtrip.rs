@@ -1,4 +1,4 @@
-//! The round-trip statistic (src/envmap/roundtrip_stats.rs) as `convert` and `roundtrip` report
+//! The round-trip statistic (src/envmap/roundtrip/stats.rs) as `convert` and `roundtrip` report
 //! it: one definition, a luminance floor relative to the map, and where the maximum is.
 
 use std::path::Path;

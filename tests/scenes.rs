@@ -182,7 +182,7 @@ fn clipped_ceiling_spots_are_lamps_of_their_halos_colour() {
 /// A night street with four sodium lamps: none of them is taken for the sun, each is sodium.
 #[test]
 fn four_sodium_lamps_are_sodium_lamps_not_a_sun() {
-    let sodium = specmap::envmap::light::white_xy("hps").unwrap();
+    let sodium = specmap::envmap::scene::main_light::white_xy("hps").unwrap();
     let lamps: Vec<[f64; 3]> = (0..4)
         .map(|k| dir(35.0 - 7.0 * k as f64, if k % 2 == 0 { 30.0 } else { -30.0 }))
         .collect();

@@ -7,7 +7,7 @@
 use specmap::colorimetry::{Observer, RgbSpace};
 use specmap::data::{self, Kind};
 use specmap::envmap::convert::{convert, ConvertOptions, LightSpec};
-use specmap::envmap::exrio::{read_spectral_rows, Precision};
+use specmap::envmap::files::{read_spectral_rows, Precision};
 use specmap::fit::{self, FitInput, Mode, Upsampler, PAPER_BASIS};
 use specmap::render::gpu::Gpu;
 use specmap::render::prepare::Prepared;

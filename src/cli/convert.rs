@@ -3,14 +3,14 @@
 use super::{outln, SpaceArg};
 use anyhow::Context;
 use clap::{Args, ValueEnum};
+use specmap::envmap::convert::pixel_spectra::WhitePremise;
 use specmap::envmap::convert::{
     self, ConvertOptions, LightSpec, Lights, Method, OutputFormat, SkySpd, SunSpd, WhiteSpec,
 };
-use specmap::envmap::engine::WhitePremise;
-use specmap::envmap::exrio::{Compression, Precision};
+use specmap::envmap::files::{Compression, Precision};
 use specmap::envmap::layout::{Layout, Orientation, Up};
+use specmap::envmap::scene::sun::SunSettings;
 use specmap::envmap::scene::ReflectorModel;
-use specmap::envmap::sun::SunSettings;
 use specmap::fit::Fit;
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -138,8 +138,8 @@ pub struct ConvertOptionArgs {
     compression: CompressionArg,
     /// zlib level of zip/zips: 4 is OpenEXR's default (its file sizes); 1 writes faster and
     /// larger files, 12 slower and smaller.
-    #[arg(long, default_value_t = specmap::envmap::exrio::ZIP_DEFAULT_LEVEL,
-          value_parser = clap::value_parser!(u8).range(0..=specmap::envmap::exrio::ZIP_MAX_LEVEL as i64))]
+    #[arg(long, default_value_t = specmap::envmap::files::ZIP_DEFAULT_LEVEL,
+          value_parser = clap::value_parser!(u8).range(0..=specmap::envmap::files::ZIP_MAX_LEVEL as i64))]
     zip_level: u8,
     /// NaN and infinite pixels are an error (default: set to 0 and counted).
     #[arg(long)]
@@ -625,8 +625,8 @@ fn write_spectra(out: &mut String, r: &convert::ConvertReport) {
 }
 
 /// The space line of the report: the space, its primaries and white, and where it comes from.
-fn space_text(s: &specmap::envmap::input::SpaceChoice) -> String {
-    use specmap::envmap::input::SpaceSource;
+fn space_text(s: &specmap::envmap::convert::read::SpaceChoice) -> String {
+    use specmap::envmap::convert::read::SpaceSource;
     let from = match s.source {
         SpaceSource::File => "declared by the file's chromaticities",
         SpaceSource::Given => "as asked",

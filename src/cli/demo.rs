@@ -11,10 +11,10 @@ use anyhow::Context;
 use clap::{Args, ValueEnum};
 use specmap::colorimetry::{Cmfs, Observer, RgbSpace};
 use specmap::envmap::convert::{self, ConvertOptions, ConvertReport};
-use specmap::envmap::heatmap::{choose_range, write_heatmap, Scale};
-use specmap::envmap::overlay::write_overlay;
+use specmap::envmap::roundtrip::heatmap::{choose_range, write_heatmap, Scale};
 use specmap::envmap::roundtrip::{round_trip_file, FileRoundTrip};
-use specmap::envmap::{exrio, layout};
+use specmap::envmap::scene::overlay::write_overlay;
+use specmap::envmap::{files, layout};
 use specmap::fit::{self, FitInput, Mode};
 use specmap::render::gpu::{AdapterReport, Gpu};
 use specmap::render::prepare::Prepared;
@@ -221,13 +221,13 @@ pub fn run(a: DemoArgs) -> anyhow::Result<()> {
     guard.folder("-o", &dir).check()?;
     // The map is read once up front (a 1024x512 map in ~0.05 s): a file that is not an image,
     // or not an environment layout, fails before anything is written.
-    let probe = exrio::read_rgb(&env_path, None)?;
+    let probe = files::read_rgb(&env_path, None)?;
     layout::detect(
         probe.image.width,
         probe.image.height,
         probe.envmap.map(|a| match a {
-            exrio::EnvmapAttr::LatLong => layout::Layout::LatLong,
-            exrio::EnvmapAttr::Cube => layout::Layout::Cube,
+            files::EnvmapAttr::LatLong => layout::Layout::LatLong,
+            files::EnvmapAttr::Cube => layout::Layout::Cube,
         }),
     )
     .with_context(|| format!("--env {}", env_path.display()))?;

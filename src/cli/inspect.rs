@@ -6,7 +6,7 @@ use super::outln;
 use anyhow::Context;
 use clap::Args;
 use specmap::envmap::convert;
-use specmap::envmap::overlay::write_overlay;
+use specmap::envmap::scene::overlay::write_overlay;
 use specmap::envmap::scene::ReflectorModel;
 use std::path::PathBuf;
 

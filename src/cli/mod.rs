@@ -292,7 +292,7 @@ pub fn emit(text: &str) {
 }
 
 /// One round-trip statistic in words (both `convert` and `roundtrip` print it).
-pub fn round_trip_text(s: &specmap::envmap::roundtrip_stats::RoundTripStats) -> String {
+pub fn round_trip_text(s: &specmap::envmap::roundtrip::stats::RoundTripStats) -> String {
     let at = s
         .max_at
         .map(|[x, y]| format!(" at ({x}, {y}), luminance {:.3e}", s.max_luminance))
@@ -315,7 +315,7 @@ pub fn round_trip_text(s: &specmap::envmap::roundtrip_stats::RoundTripStats) -> 
 }
 
 /// The floor of the round-trip statistics in words.
-pub fn floor_text(f: &specmap::envmap::roundtrip_stats::Floor) -> String {
+pub fn floor_text(f: &specmap::envmap::roundtrip::stats::Floor) -> String {
     format!(
         "pixels of luminance {:.3e} or more ({}, {:.3e})",
         f.luminance, f.rule, f.reference_luminance

@@ -2,7 +2,9 @@
 
 use super::{outln, ObserverArg, RuleArg};
 use clap::{Args, ValueEnum};
-use specmap::envmap::heatmap::{caption, check_bounds, choose_range, write_heatmap, Scale};
+use specmap::envmap::roundtrip::heatmap::{
+    caption, check_bounds, choose_range, write_heatmap, Scale,
+};
 use specmap::envmap::roundtrip::round_trip_file;
 use std::path::PathBuf;
 

@@ -1,27 +1,17 @@
-//! Environment maps: layouts and directions, EXR and HDR I/O, sun detection, and the conversion
-//! of RGB maps to spectral ones.
+//! Environment maps, one folder per stage of their life:
+//! - [`files`]: the EXR and HDR files (RGB in; spectral OpenEXR out and back in);
+//! - [`layout`]: the map's geometry (lat-long, cube, cross, strip layouts; directions, solid
+//!   angles, resampling);
+//! - [`scene`]: what a map holds (its lights: sun, sky, windows, lamps; the reflectors; the main
+//!   light and the white premise), drawn over the map;
+//! - [`convert`]: RGB -> spectral, as read -> analyse -> plan -> write, and the basis form;
+//! - [`roundtrip`]: a spectral map integrated back to RGB, its statistics and heat maps.
 
-pub mod basis_k;
-pub mod block;
-pub mod carriers;
 pub mod convert;
-pub mod engine;
-pub mod exrio;
-pub mod heatmap;
-pub mod input;
+pub mod files;
 pub mod layout;
-pub mod light;
-pub mod metric;
-pub mod overlay;
-pub mod own_basis;
-pub mod plan;
-pub mod planes;
 pub mod roundtrip;
-pub mod roundtrip_stats;
 pub mod scene;
-pub mod sun;
-pub mod write;
-pub mod zip;
 
 /// A linear RGB image in memory, row-major from the top-left pixel, f32 per channel.
 #[derive(Debug, Clone, PartialEq)]

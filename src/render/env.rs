@@ -10,9 +10,9 @@
 use super::prefiltered::Lobe;
 use super::{Environment, LightSpectra, Lighting, Sun};
 use crate::colorimetry::{Observer, RgbSpace};
-use crate::envmap::exrio::{self, AttrValue, EnvmapAttr};
+use crate::envmap::files::{self, AttrValue, EnvmapAttr};
 use crate::envmap::layout::{detect, EnvMap, Layout};
-use crate::envmap::sun::{find_sun, SunSettings};
+use crate::envmap::scene::sun::{find_sun, SunSettings};
 use crate::envmap::RgbImage;
 use crate::error::{Error, Result};
 use crate::fit::{self, FitInput, Mode, Upsampler};
@@ -307,7 +307,7 @@ pub struct EnvReport {
     /// How many spectra the map's coefficients expand with.
     pub spectra: usize,
     /// A spectral map: how well its own spectra hold it.
-    pub projection: Option<crate::envmap::own_basis::Projection>,
+    pub projection: Option<crate::envmap::convert::own_basis::Projection>,
 }
 
 /// The sun SPD given to sun pixels of an RGB map converted here: CIE D65, as in the paper.
@@ -327,7 +327,7 @@ pub fn load(path: &Path, light: &str) -> Result<(Lighting, EnvReport)> {
         load_basis(path)
     } else if channels
         .iter()
-        .any(|c| exrio::parse_spectral_channel_name(c).is_some())
+        .any(|c| files::parse_spectral_channel_name(c).is_some())
     {
         super::own::load_spectral(path, super::own::Spectra::Own)
     } else {
@@ -466,7 +466,7 @@ fn seen_rows(map: &EnvMap) -> usize {
 
 /// The map, its size and its RGB space (its `chromaticities`, else sRGB as OpenEXR has it).
 fn read_map(path: &Path) -> Result<(EnvMap, [usize; 2], RgbSpace)> {
-    let img = exrio::read_rgb(path, None)?;
+    let img = files::read_rgb(path, None)?;
     let space = match img.chromaticities {
         Some(c) => RgbSpace::from_chromaticities(c)
             .map_err(|e| Error::invalid(format!("{}: {e}", path.display())))?,
@@ -588,7 +588,7 @@ fn load_basis(path: &Path) -> Result<(Lighting, EnvReport)> {
             path.display()
         )));
     }
-    let envmap = exrio::envmap_attr(&layer.attributes).map(|a| match a {
+    let envmap = files::envmap_attr(&layer.attributes).map(|a| match a {
         EnvmapAttr::LatLong => Layout::LatLong,
         EnvmapAttr::Cube => Layout::Cube,
     });
@@ -645,7 +645,7 @@ fn load_basis(path: &Path) -> Result<(Lighting, EnvReport)> {
             .attributes
             .other
             .iter()
-            .find_map(|(n, v)| (*n == *name).then(|| exrio::attr_from_exr(v)).flatten())
+            .find_map(|(n, v)| (*n == *name).then(|| files::attr_from_exr(v)).flatten())
             .and_then(|v| match v {
                 AttrValue::F32Vec(x) => Some(x.iter().map(|&v| v as f64).collect::<Vec<_>>()),
                 _ => None,

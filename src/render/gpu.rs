@@ -9,7 +9,7 @@ use std::time::Instant;
 use wgpu::util::DeviceExt;
 
 /// The most groups of four coefficients a texel may hold on the GPU (`MAX_GROUPS` in the shader):
-/// 32 spectra, [`crate::envmap::own_basis::MAX_K`].
+/// 32 spectra, [`crate::envmap::convert::own_basis::MAX_K`].
 pub const MAX_GROUPS: usize = 8;
 
 /// The shader, next to the host code that drives it.

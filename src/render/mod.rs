@@ -177,7 +177,7 @@ pub enum LightSpectra {
     /// The paper's: `B_j = basis_reflectance_j * light` and `E`, the fourth coefficient's SPD
     /// (the sun's for a map, the main light's for a uniform or sky-and-ground environment). At
     /// the render's wavelengths the light is scaled to luminance Y = 1 (so are the `B_j`, by the
-    /// light's factor) and `E` to Y = 1 (as [`crate::envmap::engine::Engine`] does).
+    /// light's factor) and `E` to Y = 1 (as [`crate::envmap::convert::pixel_spectra::Engine`] does).
     Paper {
         /// The main light.
         light: Tabulated,

@@ -5,7 +5,7 @@
 //! each pixel adds its spectrum times its solid angle to the texel its centre falls in), the sun's
 //! pixels apart: they become the directional light, with the mean of their own spectra as its
 //! SPD. The texels' spectra are then projected onto their own principal components
-//! ([`crate::envmap::own_basis`]), keeping each texel's colour: K coefficients per texel and K
+//! ([`crate::envmap::convert::own_basis`]), keeping each texel's colour: K coefficients per texel and K
 //! spectra, exact for what `convert` writes (its spectra span a few dimensions), within a stated
 //! share for a foreign file. [`Spectra::Full`] keeps every band instead (K = N, no projection):
 //! the reference the projection is tested against.
@@ -13,12 +13,12 @@
 use super::env::{self, too_bright, CoeffMap, EnvReport, MAX_RADIANCE};
 use super::{Environment, LightSpectra, Lighting, Sun};
 use crate::colorimetry::RgbSpace;
-use crate::envmap::exrio::{self, AttrValue, EnvmapAttr};
-use crate::envmap::layout::{detect, EnvMap, Layout};
-use crate::envmap::own_basis::{
+use crate::envmap::convert::own_basis::{
     BandColour as Colour, Moments, OwnBasis, Projection, DEFAULT_DISCARD, MAX_K,
 };
-use crate::envmap::sun::{find_sun, SunSettings};
+use crate::envmap::files::{self, AttrValue, EnvmapAttr};
+use crate::envmap::layout::{detect, EnvMap, Layout};
+use crate::envmap::scene::sun::{find_sun, SunSettings};
 use crate::envmap::RgbImage;
 use crate::error::{Error, Result};
 use crate::spectrum::Tabulated;
@@ -176,7 +176,7 @@ fn geometry(path: &Path, layout: Layout, w: usize, h: usize) -> Result<EnvMap> {
 /// The sun's pixels of a spectral file: its `sun` mask (what `convert` found), else the sun
 /// found in its colours as `convert` would.
 fn sun_mask(path: &Path, geo: &EnvMap, n: usize, colour: &Colour) -> Result<Vec<bool>> {
-    if let Some(mask) = exrio::read_stored_channel(path, "sun") {
+    if let Some(mask) = files::read_stored_channel(path, "sun") {
         return Ok(mask.iter().map(|&v| v > 0.5).collect());
     }
     let (w, h) = (geo.image.width, geo.image.height);
@@ -188,7 +188,7 @@ fn sun_mask(path: &Path, geo: &EnvMap, n: usize, colour: &Colour) -> Result<Vec<
         .map(|c| c[1])
         .sum::<f64>()
         .max(f64::MIN_POSITIVE);
-    exrio::read_spectral_rows(path, |y, row| {
+    files::read_spectral_rows(path, |y, row| {
         let per = row.len() / w;
         for x in 0..w {
             let px = &row[x * per..x * per + n];
@@ -241,7 +241,7 @@ impl SunSum {
 
 /// Loads a spectral OpenEXR as a lighting of its own spectra (see the module docs).
 pub fn load_spectral(path: &Path, spectra: Spectra) -> Result<(Lighting, EnvReport)> {
-    let info = exrio::read_spectral_info(path)?;
+    let info = files::read_spectral_info(path)?;
     let wl = info.wavelengths_nm.clone();
     let n = wl.len();
     let (w, h) = (info.width, info.height);
@@ -255,7 +255,7 @@ pub fn load_spectral(path: &Path, spectra: Spectra) -> Result<(Lighting, EnvRepo
     };
     let mut too_large = None;
     let mut px = vec![0.0f64; n];
-    exrio::read_spectral_rows(path, |y, row| {
+    files::read_spectral_rows(path, |y, row| {
         let per = row.len() / w;
         for x in 0..w {
             let (Some(d), omega) = (geo.direction(x, y), geo.solid_angle(x, y)) else {
@@ -468,7 +468,7 @@ pub fn load_basis_k(path: &Path) -> Result<(Lighting, EnvReport)> {
         .other
         .iter()
         .chain(image.attributes.other.iter())
-        .filter_map(|(n, v)| exrio::attr_from_exr(v).map(|a| (n.to_string(), a)))
+        .filter_map(|(n, v)| files::attr_from_exr(v).map(|a| (n.to_string(), a)))
         .collect();
     let get = |name: &str| {
         attrs
@@ -524,7 +524,7 @@ pub fn load_basis_k(path: &Path) -> Result<(Lighting, EnvReport)> {
     let coef: Vec<Vec<f32>> = (0..k)
         .map(|j| channel(&format!("k{j:02}")))
         .collect::<Result<_>>()?;
-    let envmap = exrio::envmap_attr(&layer.attributes);
+    let envmap = files::envmap_attr(&layer.attributes);
     let geo = geometry(path, layout_of(path, w, h, envmap)?, w, h)?;
     let mut texels = TexelPair::new(geo.used_pixels(), k);
     let mut sun = SunSum {

@@ -108,7 +108,7 @@ def latlong_solid_angles(height, width):
 
 def floor_of(lum, omega):
     """The statistic's luminance floor, recomputed: 2^-13 of the 99th-percentile luminance by
-    solid angle, the percentile rounded down to 1/16 octave (see src/envmap/roundtrip_stats.rs)."""
+    solid angle, the percentile rounded down to 1/16 octave (see src/envmap/roundtrip/stats.rs)."""
     order = np.argsort(lum, kind="stable")
     cum = np.cumsum(omega[order])
     p99 = lum[order][np.searchsorted(cum, 0.99 * cum[-1])]

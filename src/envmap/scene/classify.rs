@@ -34,7 +34,7 @@ use super::families::{match_lamp, LampMatch};
 use super::regions::{components, RegionStats};
 use super::{Light, LightKind, LightSpd, SceneSettings};
 use crate::colorimetry::{cct, Xyz};
-use crate::envmap::engine::daylight_coloured;
+use crate::envmap::convert::pixel_spectra::daylight_coloured;
 use crate::error::Result;
 use nalgebra::Vector3;
 

@@ -17,12 +17,15 @@ pub mod cells;
 pub mod classify;
 pub mod emitters;
 pub mod families;
+pub mod main_light;
+pub mod overlay;
 pub mod reflectors;
 pub mod regions;
+pub mod sun;
 
 use crate::colorimetry::RgbSpace;
 use crate::envmap::layout::EnvMap;
-use crate::envmap::sun::SunSettings;
+use crate::envmap::scene::sun::SunSettings;
 use crate::error::Result;
 pub use cells::Cells;
 pub use emitters::Levels;

@@ -3,7 +3,7 @@
 //! for the same map.
 //!
 //! Per pixel the CIEDE2000 compares the input colour and its round trip scaled so the input has
-//! Y = 1 ([`crate::envmap::metric::RgbMetric::round_trip_error`]): colour and relative
+//! Y = 1 ([`crate::envmap::roundtrip::metric::RgbMetric::round_trip_error`]): colour and relative
 //! brightness, whatever the pixel's level. That makes a pixel of 1e-7 count as much as the sky
 //! in the maximum, although its error (half-float rounding, a colour no spectrum makes) cannot
 //! be seen. So the statistic is taken over the pixels at or above a luminance floor relative to

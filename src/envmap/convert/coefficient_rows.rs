@@ -3,8 +3,8 @@
 //! multiply-add per pixel and spectrum in use, computed as the writer asks for it: no
 //! pixel-interleaved copy of the bands is made, nor transposed.
 
-use super::block::LineSource;
-use super::engine::Combination;
+use crate::envmap::convert::pixel_spectra::Combination;
+use crate::envmap::files::block::LineSource;
 use crate::error::Result;
 use rayon::prelude::*;
 

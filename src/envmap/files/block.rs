@@ -4,8 +4,8 @@
 //! directly (low bytes of every half sample, then high bytes), so no planar or interleaved copy
 //! of the block is ever made. The scratch buffers live in a [`BlockEncoder`], one per thread.
 
-use super::exrio::{Compression, HALF_MAX};
-use super::zip::ZipEncoder;
+use crate::envmap::files::zip::ZipEncoder;
+use crate::envmap::files::{Compression, HALF_MAX};
 use crate::error::{Error, Result};
 use exr::block::chunk::{Chunk, CompressedBlock, CompressedScanLineBlock};
 use exr::block::{BlockIndex, UncompressedBlock};

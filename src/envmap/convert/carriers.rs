@@ -19,11 +19,11 @@
 
 use crate::colorimetry::{Cmfs, Observer, RgbSpace, Xyz};
 use crate::data;
-use crate::envmap::engine::{
+use crate::envmap::convert::pixel_spectra::{
     daylight_coloured, Basis3, Took, WhitePremise, NEGATIVE_TOLERANCE, SMOOTH_CENTRE_NM,
     SMOOTH_HALF_WIDTH_NM,
 };
-use crate::envmap::metric::RgbMetric;
+use crate::envmap::roundtrip::metric::RgbMetric;
 use crate::error::{Error, Result};
 use crate::illuminant;
 use crate::spectrum::{Interpolation, Rule, Spectrum, Tabulated, WavelengthGrid};

@@ -13,12 +13,14 @@
 //!   `specmap.basisSun` (the sun's spectrum's index, -1 without a sun), and the spectral file's
 //!   own attributes. A pixel's radiance is `sum_j k_j basis_j`.
 
-use super::exrio::{
+use crate::envmap::convert::own_basis::{
+    relative_residual, BandColour, Moments, OwnBasis, DEFAULT_DISCARD, MAX_K,
+};
+use crate::envmap::files::{
     self, AttrValue, ChannelSet, Compression, Precision, SpectralLayout, SpectralWriter, HALF_MAX,
 };
-use super::layout::{detect, EnvMap, Layout};
-use super::own_basis::{relative_residual, BandColour, Moments, OwnBasis, DEFAULT_DISCARD, MAX_K};
-use super::RgbImage;
+use crate::envmap::layout::{detect, EnvMap, Layout};
+use crate::envmap::RgbImage;
 use crate::error::{Error, Result};
 use std::path::Path;
 
@@ -30,7 +32,7 @@ pub struct BasisStats {
     /// Whether one of them is the sun's.
     pub sun: bool,
     /// The share of the non-sun pixels' spectral energy outside the spectra (see
-    /// [`super::own_basis`]).
+    /// [`crate::envmap::convert::own_basis`]).
     pub discarded: f64,
     /// The largest relative spectral residual of a pixel, and where.
     pub max_residual: f64,
@@ -59,20 +61,20 @@ pub struct Analysis {
 
 /// Reads `spectral` once: the moments of its non-sun pixels and the sun's pixels' mean spectrum.
 pub fn analyse(spectral: &Path) -> Result<Analysis> {
-    let info = exrio::read_spectral_info(spectral)?;
+    let info = files::read_spectral_info(spectral)?;
     let (w, h) = (info.width, info.height);
     let wl = info.wavelengths_nm.clone();
     let n = wl.len();
     let colour = BandColour::new(&wl)?;
-    let mask: Vec<bool> = exrio::read_stored_channel(spectral, "sun")
+    let mask: Vec<bool> = files::read_stored_channel(spectral, "sun")
         .map(|m| m.iter().map(|&v| v > 0.5).collect())
         .unwrap_or_else(|| vec![false; w * h]);
     let layout = detect(
         w,
         h,
         info.envmap.map(|a| match a {
-            exrio::EnvmapAttr::LatLong => Layout::LatLong,
-            exrio::EnvmapAttr::Cube => Layout::Cube,
+            files::EnvmapAttr::LatLong => Layout::LatLong,
+            files::EnvmapAttr::Cube => Layout::Cube,
         }),
     )
     .map_err(|e| Error::invalid(format!("{}: {e}", spectral.display())))?;
@@ -82,7 +84,7 @@ pub fn analyse(spectral: &Path) -> Result<Analysis> {
     let mut peak = 0f64;
     let mut sun = vec![0.0; n];
     let mut s = vec![0.0; n];
-    exrio::read_spectral_rows(spectral, |y, row| {
+    files::read_spectral_rows(spectral, |y, row| {
         let per = row.len() / w;
         for x in 0..w {
             for (a, v) in s.iter_mut().zip(&row[x * per..x * per + n]) {
@@ -152,7 +154,7 @@ pub fn write(
     compression: Compression,
     zip_level: u8,
 ) -> Result<(BasisStats, u64)> {
-    let info = exrio::read_spectral_info(spectral)?;
+    let info = files::read_spectral_info(spectral)?;
     let (w, h) = (info.width, info.height);
     let n = a.wavelengths.len();
     let kb = a.basis.len();
@@ -202,7 +204,7 @@ pub fn write(
     let mut s = vec![0.0; n];
     let mut c = vec![0.0; kb];
     let mut failed = None;
-    exrio::read_spectral_rows(spectral, |y, row| {
+    files::read_spectral_rows(spectral, |y, row| {
         let per = row.len() / w;
         let mut out = vec![0f32; w * per_out];
         for x in 0..w {

@@ -1,8 +1,11 @@
 //! OpenEXR and Radiance HDR input, streaming spectral OpenEXR output (Fichet et al. 2021 layout).
 
-use super::block::{BlockEncoder, BlockFormat, Encoded, Interleaved, LineSource};
-use super::RgbImage;
+pub mod block;
+pub mod zip;
+
 use crate::colorimetry::Chromaticities;
+use crate::envmap::files::block::{BlockEncoder, BlockFormat, Encoded, Interleaved, LineSource};
+use crate::envmap::RgbImage;
 use crate::error::{Error, Result};
 use exr::block::chunk::TileCoordinates;
 use exr::block::reader::ChunksReader;
@@ -630,7 +633,9 @@ pub struct SpectralLayout {
     pub unscaled: Vec<String>,
 }
 
-pub use super::zip::{DEFAULT_LEVEL as ZIP_DEFAULT_LEVEL, MAX_LEVEL as ZIP_MAX_LEVEL};
+pub use crate::envmap::files::zip::{
+    DEFAULT_LEVEL as ZIP_DEFAULT_LEVEL, MAX_LEVEL as ZIP_MAX_LEVEL,
+};
 
 /// The channel name of an emissive band in the Fichet et al. (2021) layout: `S0.550,000000nm`.
 pub fn spectral_channel_name(nm: f64) -> String {
@@ -699,7 +704,7 @@ type Job<'a> = (usize, &'a dyn LineSource, usize);
 /// Writes a spectral OpenEXR row by row. Complete blocks of rows are encoded (half or float
 /// samples, channels in file order) and compressed in parallel on rayon's threads, then handed
 /// to a thread that writes them, so memory holds the rows of one call and their compressed
-/// blocks, never the image. ZIP and ZIPS use libdeflate as OpenEXR does ([`super::zip`]); the
+/// blocks, never the image. ZIP and ZIPS use libdeflate as OpenEXR does ([`crate::envmap::files::zip`]); the
 /// other compressions use the `exr` crate's compressors. The file is written to a temporary path
 /// beside the destination and renamed into place by [`SpectralWriter::finish`]; dropping the
 /// writer without finishing deletes the temporary file.
@@ -1098,7 +1103,7 @@ impl SpectralWriter {
             let pixel = i / self.per_pixel;
             let format = self.block_format();
             let (x, y) = (pixel % self.width, y0 + pixel / self.width);
-            return Err(super::block::value_error(
+            return Err(crate::envmap::files::block::value_error(
                 &format,
                 rows[i],
                 x,

@@ -3,7 +3,7 @@
 
 use crate::colorimetry::{Chromaticities, RgbSpace};
 use crate::envmap::convert::{ConvertOptions, MAX_INPUT};
-use crate::envmap::exrio::{self, EnvmapAttr};
+use crate::envmap::files::{self, EnvmapAttr};
 use crate::envmap::layout::{detect, EnvMap, Layout};
 use crate::error::{Error, Result};
 use std::path::Path;
@@ -185,14 +185,14 @@ fn read_input(
     opts: &ConvertOptions,
 ) -> Result<(EnvMap, String, Option<Chromaticities>)> {
     if opts.faces || input.contains("{face}") {
-        let faces = exrio::read_face_files(input, opts.layer.as_deref())?;
+        let faces = files::read_face_files(input, opts.layer.as_deref())?;
         let declared = faces[0].chromaticities;
         if let Some(k) = (1..6).find(|&k| faces[k].chromaticities != declared) {
             return Err(Error::invalid(format!(
                 "{input}: the {} face declares other chromaticities than the {} face ({} and \
                  {}): one map is in one RGB space",
-                exrio::FACE_NAMES[k],
-                exrio::FACE_NAMES[0],
+                files::FACE_NAMES[k],
+                files::FACE_NAMES[0],
                 describe(faces[k].chromaticities),
                 describe(declared)
             )));
@@ -200,7 +200,7 @@ fn read_input(
         let map = EnvMap::from_faces(faces.map(|f| f.image))?;
         return Ok((map, format!("six face files {input}"), declared));
     }
-    let img = exrio::read_rgb(Path::new(input), opts.layer.as_deref())?;
+    let img = files::read_rgb(Path::new(input), opts.layer.as_deref())?;
     let attr = img.envmap.map(|a| match a {
         EnvmapAttr::LatLong => Layout::LatLong,
         EnvmapAttr::Cube => Layout::Cube,

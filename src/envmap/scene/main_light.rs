@@ -7,7 +7,7 @@
 
 use crate::colorimetry::{cct, Cct, Cmfs, Observer, RgbSpace, Xyz};
 use crate::data;
-use crate::envmap::engine::WhitePremise;
+use crate::envmap::convert::pixel_spectra::WhitePremise;
 use crate::envmap::layout::EnvMap;
 use crate::error::Result;
 use crate::spectrum::{Interpolation, Rule, WavelengthGrid};
@@ -224,7 +224,7 @@ pub fn rgb_of_xy(xy: [f64; 2], space: &RgbSpace) -> [f32; 3] {
 mod tests {
     use super::*;
     use crate::envmap::layout::Layout;
-    use crate::envmap::sun::{find_sun, SunSettings};
+    use crate::envmap::scene::sun::{find_sun, SunSettings};
     use crate::envmap::RgbImage;
 
     /// A dim grey room with a bright patch of the given colour overhead.

@@ -1,21 +1,30 @@
 //! RGB environment map -> spectral environment map, as a pipeline of named stages:
-//! read ([`crate::envmap::input`]: read, sanitise, resample) -> analyse
-//! ([`crate::envmap::plan::analyse`]: the scene's lights, the white premise) -> plan
-//! ([`crate::envmap::plan::plan`]: every decision as a value) -> write
-//! ([`crate::envmap::write`]: stream the spectra block by block).
+//! read ([`crate::envmap::convert::read`]: read, sanitise, resample) -> analyse
+//! ([`crate::envmap::convert::plan::analyse`]: the scene's lights, the white premise) -> plan
+//! ([`crate::envmap::convert::plan::plan`]: every decision as a value) -> write
+//! ([`crate::envmap::convert::write`]: stream the spectra block by block).
+
+pub mod basis_form;
+pub mod carriers;
+pub mod coefficient_rows;
+pub mod own_basis;
+pub mod pixel_spectra;
+pub mod plan;
+pub mod read;
+pub mod write;
 
 use crate::colorimetry::{Observer, RgbSpace};
 use crate::data;
-use crate::envmap::engine::WhitePremise;
-use crate::envmap::exrio::{self, AttrValue, Compression, Precision};
-use crate::envmap::input::{self, Sanitized, SpaceChoice};
+use crate::envmap::convert::pixel_spectra::WhitePremise;
+use crate::envmap::convert::plan::{Analysis, PixelPlan, Plan};
+use crate::envmap::convert::read::{Sanitized, SpaceChoice};
+use crate::envmap::convert::write::{FileSettings, SpectraCount};
+use crate::envmap::files::{self, AttrValue, Compression, Precision};
 use crate::envmap::layout::{EnvMap, Layout, Orientation};
-use crate::envmap::light::{LightChoice, WhiteChoice};
-use crate::envmap::plan::{self, Analysis, PixelPlan, Plan};
-use crate::envmap::roundtrip_stats::{Floor, RoundTripStats};
+use crate::envmap::roundtrip::stats::{Floor, RoundTripStats};
+use crate::envmap::scene::main_light::{LightChoice, WhiteChoice};
+use crate::envmap::scene::sun::SunSettings;
 use crate::envmap::scene::{Levels, Light, ReflectorModel, Reflectors, Scene};
-use crate::envmap::sun::SunSettings;
-use crate::envmap::write::{self, FileSettings, SpectraCount};
 use crate::error::{Error, Result};
 use crate::fit::{self, Fit, Mode};
 use crate::spectrum::{Rule, WavelengthGrid};
@@ -120,7 +129,7 @@ pub struct ConvertOptions {
     /// The input's RGB space when the file declares none (OpenEXR's `chromaticities`; a file
     /// without them is Rec.709 with D65, sRGB), or whatever it declares with
     /// `space_overrides_file`. [`convert`] and [`inspect`] resolve it before the analysis (see
-    /// [`crate::envmap::input::SpaceChoice`]).
+    /// [`crate::envmap::convert::read::SpaceChoice`]).
     pub space: RgbSpace,
     /// `space` was asked for (`--space`, a fit's space): it replaces the file's chromaticities,
     /// with a note when they differ.
@@ -201,7 +210,7 @@ impl Default for ConvertOptions {
             format: OutputFormat::Spectral,
             precision: Precision::Half,
             compression: Compression::Zip,
-            zip_level: crate::envmap::exrio::ZIP_DEFAULT_LEVEL,
+            zip_level: crate::envmap::files::ZIP_DEFAULT_LEVEL,
             tolerance: None,
             strict: false,
         }
@@ -312,7 +321,7 @@ pub struct ConvertReport {
     pub bright_reflectors: Vec<String>,
     pub spectra: SpectraCount,
     /// The basis form: how its K spectra hold the conversion's spectra.
-    pub basis: Option<super::basis_k::BasisStats>,
+    pub basis: Option<crate::envmap::convert::basis_form::BasisStats>,
     /// The round trip over the pixels whose spectrum could not reproduce their colour (the
     /// nearest non-negative spectra, clipped lamp pixels, the paper mode's pixels but white; the
     /// sun aside).
@@ -328,7 +337,7 @@ pub struct ConvertReport {
     /// The luminance floor of the round-trip statistics (see [`Floor`]).
     pub roundtrip_floor: Floor,
     /// Over all pixels, and over those not replaced by the sun's SPD (see
-    /// [`crate::envmap::roundtrip_stats`]: the statistic `specmap roundtrip` reports).
+    /// [`crate::envmap::roundtrip::stats`]: the statistic `specmap roundtrip` reports).
     pub roundtrip: RoundTripStats,
     pub roundtrip_without_sun: RoundTripStats,
     pub seconds_read: f64,
@@ -409,8 +418,8 @@ pub struct Inspection {
 
 /// Reads `input` and settles its RGB space (see [`input::SpaceChoice`]): the options every
 /// later stage sees have that space.
-fn read_input(input: &str, opts: &ConvertOptions) -> Result<(input::Input, ConvertOptions)> {
-    let read = input::read(input, opts)?;
+fn read_input(input: &str, opts: &ConvertOptions) -> Result<(read::Input, ConvertOptions)> {
+    let read = read::read(input, opts)?;
     let opts = ConvertOptions {
         space: read.space.space,
         space_overrides_file: true,
@@ -479,7 +488,7 @@ pub fn convert(
         attributes: attributes(&analysis, &plan),
     };
     // The basis form is factored from the spectral form: written first, as float, beside the
-    // output, then read twice (super::basis_k) and removed.
+    // output, then read twice (crate::envmap::convert::basis_form) and removed.
     let basis_form = plan.format == OutputFormat::Basis;
     let spectral_out = if basis_form {
         plan.format = OutputFormat::Spectral;
@@ -503,8 +512,8 @@ pub fn convert(
     let written = write::write(&read.map, cells, &plan, file, &spectral_out, progress)?;
     let (basis, bytes) = if basis_form {
         let done = (|| {
-            let a = super::basis_k::analyse(&spectral_out)?;
-            super::basis_k::write(
+            let a = crate::envmap::convert::basis_form::analyse(&spectral_out)?;
+            crate::envmap::convert::basis_form::write(
                 &spectral_out,
                 &a,
                 output,
@@ -688,7 +697,7 @@ fn radiometry(premise: WhitePremise) -> &'static str {
 pub fn input_files(input: &str, opts: &ConvertOptions) -> Vec<PathBuf> {
     let mut files = Vec::new();
     if opts.faces || input.contains("{face}") {
-        for (name, signed) in exrio::FACE_NAMES.iter().zip(exrio::FACE_SIGNED) {
+        for (name, signed) in files::FACE_NAMES.iter().zip(files::FACE_SIGNED) {
             files.push(PathBuf::from(input.replace("{face}", name)));
             files.push(PathBuf::from(input.replace("{face}", signed)));
         }

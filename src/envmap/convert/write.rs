@@ -1,18 +1,18 @@
 //! The conversion's last stage: stream the planned spectra into the OpenEXR file, a batch of
 //! rows at a time, and measure what was written (round trip, which spectrum each pixel took).
 
-use crate::envmap::carriers::{self, Written};
+use crate::envmap::convert::carriers::{self, Written};
+use crate::envmap::convert::coefficient_rows::{self, RowMut, SpectralRows};
+use crate::envmap::convert::pixel_spectra::{Engine, PixelKind, Took};
+use crate::envmap::convert::plan::{PixelPlan, Plan};
 use crate::envmap::convert::OutputFormat;
-use crate::envmap::engine::{Engine, PixelKind, Took};
-use crate::envmap::exrio::{
+use crate::envmap::files::{
     spectral_channel_name, AttrValue, ChannelSet, Compression, EnvmapAttr, Precision,
     SpectralLayout, SpectralWriter, HALF_MAX,
 };
 use crate::envmap::layout::{EnvMap, Layout};
-use crate::envmap::metric::RgbMetric;
-use crate::envmap::plan::{PixelPlan, Plan};
-use crate::envmap::planes::{self, RowMut, SpectralRows};
-use crate::envmap::roundtrip_stats::{Floor, RoundTripAccumulator, RoundTripStats};
+use crate::envmap::roundtrip::metric::RgbMetric;
+use crate::envmap::roundtrip::stats::{Floor, RoundTripAccumulator, RoundTripStats};
 use crate::envmap::scene::Cells;
 use crate::error::Result;
 use crate::fit::Mode;
@@ -442,7 +442,7 @@ fn stream_planes(
             .expect("no tally is merged by a panicking thread")
             .merge(&t);
     };
-    planes::stream(
+    coefficient_rows::stream(
         &mut planes,
         height,
         rows_per_block,
@@ -485,7 +485,7 @@ fn write_row(px: &Pixels, y: usize, row: &mut [f32], per_pixel: usize, t: &mut T
 }
 
 /// Adds pixel (x, y) to the tally: which spectrum it took, and its round trip (see
-/// [`crate::envmap::roundtrip_stats`]) over all pixels, without the sun, and if inexact.
+/// [`crate::envmap::roundtrip::stats`]) over all pixels, without the sun, and if inexact.
 fn measure(
     t: &mut Tally,
     px: &Pixels,

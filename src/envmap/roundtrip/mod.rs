@@ -1,11 +1,15 @@
 //! `roundtrip`: re-read a spectral OpenEXR, integrate its spectra back to RGB and compare them
 //! with the file's own R, G, B preview (the original pixels), pixel by pixel, streaming.
 
+pub mod heatmap;
+pub mod metric;
+pub mod stats;
+
 use crate::colorimetry::{Chromaticities, Observer, RgbSpace};
-use crate::envmap::exrio::{read_spectral_rows, AttrValue, EnvmapAttr};
+use crate::envmap::files::{read_spectral_rows, AttrValue, EnvmapAttr};
 use crate::envmap::layout::{detect, EnvMap, Layout};
-use crate::envmap::metric::RgbMetric;
-use crate::envmap::roundtrip_stats::{Floor, RoundTripAccumulator, RoundTripStats};
+use crate::envmap::roundtrip::metric::RgbMetric;
+use crate::envmap::roundtrip::stats::{Floor, RoundTripAccumulator, RoundTripStats};
 use crate::envmap::RgbImage;
 use crate::error::{Error, Result};
 use crate::spectrum::{Interpolation, Rule, Tabulated, WavelengthGrid};
@@ -28,7 +32,7 @@ pub struct FileRoundTrip {
     pub white_balance: Option<[f64; 3]>,
     /// The luminance floor of the statistics (see [`Floor`]).
     pub floor: Floor,
-    /// The statistic `convert` reports too (see [`crate::envmap::roundtrip_stats`]).
+    /// The statistic `convert` reports too (see [`crate::envmap::roundtrip::stats`]).
     pub all: RoundTripStats,
     /// Pixels not marked in the `sun` channel (all pixels when the file has none).
     pub without_sun: RoundTripStats,
@@ -57,7 +61,7 @@ fn preview_space(
 
 /// Integrates every pixel's spectrum back to RGB and compares it with the preview channels.
 /// `heatmap`, if given, receives the per-pixel CIEDE2000 (row-major; NaN for a pixel not
-/// compared), for [`crate::envmap::heatmap::write_heatmap`].
+/// compared), for [`crate::envmap::roundtrip::heatmap::write_heatmap`].
 pub fn round_trip_file(
     path: &Path,
     observer: Observer,
@@ -66,7 +70,7 @@ pub fn round_trip_file(
 ) -> Result<FileRoundTrip> {
     // The header once: size, the checked wavelengths (positive, each once, sorted) and the
     // attributes; the pixels follow in read_spectral_rows.
-    let header = crate::envmap::exrio::read_spectral_info(path)?;
+    let header = crate::envmap::files::read_spectral_info(path)?;
     let wavelengths = header.wavelengths_nm.clone();
     if wavelengths.len() < 2 {
         return Err(Error::invalid(format!(
@@ -140,7 +144,7 @@ pub fn round_trip_file(
     });
     let layout = detect(width, height, envmap).ok();
     let solid = layout.and_then(|l| EnvMap::new(l, RgbImage::new(width, height)).ok());
-    let sun = crate::envmap::exrio::read_stored_channel(path, "sun");
+    let sun = crate::envmap::files::read_stored_channel(path, "sun");
     let bands = wavelengths.len();
     let (mut all, mut no_sun) = (
         RoundTripAccumulator::default(),

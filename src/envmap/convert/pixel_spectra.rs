@@ -24,9 +24,9 @@
 //! Sun pixels get the sun's SPD at the luminance their own conversion would have had.
 
 use crate::colorimetry::{Cmfs, Xyz};
-use crate::envmap::metric::RgbMetric;
+use crate::envmap::roundtrip::metric::RgbMetric;
 #[cfg(test)]
-use crate::envmap::metric::ROUND_TRIP_ZERO;
+use crate::envmap::roundtrip::metric::ROUND_TRIP_ZERO;
 use crate::error::{Error, Result};
 use crate::fit::{Fit, Upsampler, CONDITION_LIMIT};
 use crate::illuminant;

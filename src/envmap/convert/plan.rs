@@ -3,15 +3,15 @@
 
 use crate::colorimetry::{Observer, RgbSpace};
 use crate::data;
-use crate::envmap::carriers::{Assign, Carrier, CarrierEngine, Colorimeter, SunSpec};
+use crate::envmap::convert::carriers::{Assign, Carrier, CarrierEngine, Colorimeter, SunSpec};
+use crate::envmap::convert::pixel_spectra::{
+    daylight_coloured, daylight_residual, Engine, Model, SunSource, WhitePremise, DAYLIGHT_RESIDUAL,
+};
+use crate::envmap::convert::read::Input;
 use crate::envmap::convert::{
     ConvertOptions, LightSpec, Lights, Method, OutputFormat, SkySpd, SunSpd, WhiteSpec,
 };
-use crate::envmap::engine::{
-    daylight_coloured, daylight_residual, Engine, Model, SunSource, WhitePremise, DAYLIGHT_RESIDUAL,
-};
-use crate::envmap::input::Input;
-use crate::envmap::light::{self, LightChoice, WhiteChoice};
+use crate::envmap::scene::main_light::{self, LightChoice, WhiteChoice};
 use crate::envmap::scene::{self, LightKind, Scene, SceneSettings, REFLECTOR};
 use crate::error::Result;
 use crate::fit::{self, Fit, FitInput};
@@ -50,7 +50,7 @@ pub fn analyse(input: &mut Input, opts: &ConvertOptions) -> Result<Analysis> {
         (LightSpec::Named(n), _) => (n.clone(), None),
         (LightSpec::Auto, true) => {
             let sun = scene.sun().map(|s| (s.energy_share, s.elevation_deg));
-            let c = light::choose(&input.map, sun, &opts.space)?;
+            let c = main_light::choose(&input.map, sun, &opts.space)?;
             (c.light.clone(), Some(c))
         }
         (LightSpec::Auto, false) => (dominant_light(&scene), None),
@@ -111,7 +111,7 @@ fn white_premise(
                      for a map white-balanced to its lamps"
                 .into(),
         },
-        WhiteSpec::Auto => light::choose_white(&input.map, &opts.space, light)?,
+        WhiteSpec::Auto => main_light::choose_white(&input.map, &opts.space, light)?,
     })
 }
 
