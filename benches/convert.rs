@@ -9,8 +9,8 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Through
 use exr::block::chunk::CompressedBlock;
 use rayon::prelude::*;
 use specmap::envmap::convert::{convert, ConvertOptions, LightSpec};
-use specmap::envmap::exrio::Compression;
-use specmap::envmap::zip::ZipEncoder;
+use specmap::envmap::files::zip::ZipEncoder;
+use specmap::envmap::files::Compression;
 use specmap::fit::Mode;
 use std::path::Path;
 use std::time::Duration;

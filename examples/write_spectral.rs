@@ -8,7 +8,7 @@
 //! Pixel (x, y), band k (wavelengths 400, 450, ..., 700 nm, plus 382.5 nm as band 0):
 //! value = 0.5 (x + 1) + 0.25 y + 0.125 k; preview R = x, G = y, B = 1. All exact in half.
 
-use specmap::envmap::exrio::{
+use specmap::envmap::files::{
     AttrValue, ChannelSet, Compression, EnvmapAttr, Precision, SpectralLayout, SpectralWriter,
 };
 use std::path::PathBuf;
@@ -17,7 +17,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     if args.first().map(String::as_str) == Some("--rgb-sums") {
         let path = PathBuf::from(args.get(1).ok_or("--rgb-sums needs a file")?);
-        let input = specmap::envmap::exrio::read_rgb(&path, None)?;
+        let input = specmap::envmap::files::read_rgb(&path, None)?;
         let mut sums = [0.0f64; 3];
         for p in &input.image.pixels {
             for (s, v) in sums.iter_mut().zip(p) {
@@ -65,7 +65,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         compression,
         envmap: Some(EnvmapAttr::LatLong),
         ev: None,
-        zip_level: specmap::envmap::exrio::ZIP_DEFAULT_LEVEL,
+        zip_level: specmap::envmap::files::ZIP_DEFAULT_LEVEL,
         unscaled: Vec::new(),
         attributes: vec![
             ("mainLight".into(), AttrValue::Text("D65".into())),
