@@ -55,9 +55,9 @@ pub fn hit_pixel(p: &Prepared, x: usize, y: usize) -> Option<(usize, [f64; 3])> 
     hit(&p.objects, candidates(p, x, y), px, py)
 }
 
-/// The objects pixel (x, y) can hit ([`super::rows`]).
+/// The objects pixel (x, y) can hit ([`super::candidates`]).
 fn candidates(p: &Prepared, x: usize, y: usize) -> &[u32] {
-    super::rows::candidates(&p.rows, p.params.width as usize, x, y)
+    super::candidates::candidates(&p.rows, p.params.width as usize, x, y)
 }
 
 /// The nearest hit along the ray down −Z through (px, py) among the objects `candidates`

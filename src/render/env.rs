@@ -1,13 +1,18 @@
-//! Environment light in coefficient space: lat-long maps of `(c_R, c_G, c_B, s)`, the sun taken
-//! out as a directional light, the diffuse and specular pre-filtering both renderers sample, and
-//! loading maps from RGB, `basis` and spectral OpenEXR files.
-//!
-//! Maps are lat-long in OpenEXR's orientation ([`crate::envmap::layout`]): texel `(x, y)` looks
-//! at longitude `-2 pi ((x + 0.5) / w - 0.5)` and latitude `pi / 2 - pi (y + 0.5) / h`. Lookups
-//! are bilinear, wrapping in longitude and clamped in latitude; `sample` here and `sample_map` in
-//! `gpu.wgsl` are the same function.
+//! Environment light in coefficient space: the sun taken out as a directional light, the
+//! diffuse and specular pre-filtering both renderers sample, and loading maps from RGB, `basis`
+//! and spectral OpenEXR files. The maps themselves are [`super::latlong`]'s (re-exported here,
+//! as are [`EnvReport`] and [`MAX_RADIANCE`]).
 
+pub use super::env_report::{EnvReport, SUN_SPD};
+pub use super::latlong::{
+    bilinear, direction, sample, sample_into, solid_angle, CoeffMap, Maps, BACKGROUND_ROWS,
+    SOURCE_ROWS,
+};
+pub use super::radiance_limit::MAX_RADIANCE;
+
+use super::own_spectra::{self, Spectra};
 use super::prefiltered::Lobe;
+use super::radiance_limit::too_bright;
 use super::{Environment, LightSpectra, Lighting, Sun};
 use crate::colorimetry::{Observer, RgbSpace};
 use crate::envmap::files::{self, AttrValue, EnvmapAttr};
@@ -18,156 +23,13 @@ use crate::error::{Error, Result};
 use crate::fit::{self, FitInput, Mode, Upsampler};
 use crate::spectrum::{Rule, Tabulated, WavelengthGrid};
 use rayon::prelude::*;
-use std::f64::consts::PI;
 use std::path::Path;
 use std::sync::Arc;
 
-/// Rows of the lat-long a file map is resampled to before filtering.
-pub const SOURCE_ROWS: usize = 64;
-/// Rows of the lat-long the background is seen in (the lighting's is coarser: it is filtered).
-pub const BACKGROUND_ROWS: usize = 256;
 /// Rows of the diffuse irradiance map.
 pub const DIFFUSE_ROWS: usize = 16;
 /// Rows of each specular map.
 pub const SPECULAR_ROWS: usize = 32;
-
-/// A lat-long map of `4 groups` coefficients per texel: texel (x, y) holds the groups
-/// `texels[(y w + x) groups + g]`, coefficients `4 g .. 4 g + 3`.
-#[derive(Debug, Clone, PartialEq)]
-pub struct CoeffMap {
-    pub width: usize,
-    pub height: usize,
-    pub groups: usize,
-    pub texels: Vec<[f32; 4]>,
-}
-
-impl CoeffMap {
-    /// The same value everywhere (1 x 1).
-    pub fn constant(c: [f32; 4]) -> CoeffMap {
-        CoeffMap {
-            width: 1,
-            height: 1,
-            groups: 1,
-            texels: vec![c],
-        }
-    }
-
-    /// A `2 rows x rows` map of one group computed per texel direction.
-    pub fn from_fn(rows: usize, f: impl Fn([f64; 3]) -> [f32; 4] + Sync) -> CoeffMap {
-        CoeffMap::from_fn_groups(rows, 1, |d, out| out[0] = f(d))
-    }
-
-    /// A `2 rows x rows` map of `groups` groups computed per texel direction.
-    pub fn from_fn_groups(
-        rows: usize,
-        groups: usize,
-        f: impl Fn([f64; 3], &mut [[f32; 4]]) + Sync,
-    ) -> CoeffMap {
-        let (w, h) = (2 * rows, rows);
-        let mut texels = vec![[0f32; 4]; w * h * groups];
-        texels
-            .par_chunks_mut(groups)
-            .enumerate()
-            .for_each(|(i, out)| f(direction(w, h, i % w, i / w), out));
-        CoeffMap {
-            width: w,
-            height: h,
-            groups,
-            texels,
-        }
-    }
-
-    /// Bilinear lookup in direction `dir` (unit): `4 groups` coefficients.
-    pub fn sample(&self, dir: [f64; 3]) -> Vec<f64> {
-        sample(&self.texels, self.width, self.height, self.groups, dir)
-    }
-
-    /// The coefficients of texel `i` (row-major).
-    pub fn texel(&self, i: usize) -> impl Iterator<Item = f32> + '_ {
-        self.texels[i * self.groups..(i + 1) * self.groups]
-            .iter()
-            .flatten()
-            .copied()
-    }
-}
-
-/// A file's map at two resolutions: the one the lighting is filtered from, and the one seen as
-/// the background (and behind transparent objects).
-#[derive(Debug, Clone, PartialEq)]
-pub struct Maps {
-    /// [`SOURCE_ROWS`] rows.
-    pub light: CoeffMap,
-    /// Up to [`BACKGROUND_ROWS`] rows.
-    pub seen: CoeffMap,
-}
-
-/// The unit direction of texel (x, y) of a `w x h` lat-long.
-pub fn direction(w: usize, h: usize, x: usize, y: usize) -> [f64; 3] {
-    let lon = -2.0 * PI * ((x as f64 + 0.5) / w as f64 - 0.5);
-    let lat = PI / 2.0 - PI * (y as f64 + 0.5) / h as f64;
-    [lon.sin() * lat.cos(), lat.sin(), lon.cos() * lat.cos()]
-}
-
-/// The solid angle of a texel in row `y` of a `w x h` lat-long.
-pub fn solid_angle(w: usize, h: usize, y: usize) -> f64 {
-    let t0 = PI * y as f64 / h as f64;
-    let t1 = PI * (y + 1) as f64 / h as f64;
-    2.0 * PI / w as f64 * (t0.cos() - t1.cos())
-}
-
-/// The four texels around direction `dir` in a `w x h` lat-long and their bilinear weights.
-pub fn bilinear(w: usize, h: usize, dir: [f64; 3]) -> [(usize, f64); 4] {
-    // A one-texel map (every uniform lighting's) has no direction to look up.
-    if w * h == 1 {
-        return [(0, 1.0), (0, 0.0), (0, 0.0), (0, 0.0)];
-    }
-    let u = 0.5 - dir[0].atan2(dir[2]) / (2.0 * PI);
-    let v = dir[1].clamp(-1.0, 1.0).acos() / PI;
-    let fx = u * w as f64 - 0.5;
-    let fy = (v * h as f64 - 0.5).clamp(0.0, (h - 1) as f64);
-    let x0f = fx.floor();
-    let tx = fx - x0f;
-    let y0f = fy.floor();
-    let ty = fy - y0f;
-    let x0 = (x0f as i64).rem_euclid(w as i64) as usize;
-    let x1 = (x0 + 1) % w;
-    let y0 = y0f as usize;
-    let y1 = (y0 + 1).min(h - 1);
-    [
-        (y0 * w + x0, (1.0 - tx) * (1.0 - ty)),
-        (y0 * w + x1, tx * (1.0 - ty)),
-        (y1 * w + x0, (1.0 - tx) * ty),
-        (y1 * w + x1, tx * ty),
-    ]
-}
-
-/// Bilinear lookup of a `w x h` lat-long of `groups` groups per texel stored row-major in
-/// `texels`: `4 groups` coefficients.
-pub fn sample(texels: &[[f32; 4]], w: usize, h: usize, groups: usize, dir: [f64; 3]) -> Vec<f64> {
-    let mut out = Vec::new();
-    sample_into(texels, w, h, groups, dir, &mut out);
-    out
-}
-
-/// [`sample`] into `out` (resized to `4 groups`), for callers that reuse one buffer.
-pub fn sample_into(
-    texels: &[[f32; 4]],
-    w: usize,
-    h: usize,
-    groups: usize,
-    dir: [f64; 3],
-    out: &mut Vec<f64>,
-) {
-    out.clear();
-    out.resize(4 * groups, 0.0);
-    for (t, wt) in bilinear(w, h, dir) {
-        for (g, c) in texels[t * groups..(t + 1) * groups].iter().enumerate() {
-            for k in 0..4 {
-                out[4 * g + k] += wt * c[k] as f64;
-            }
-        }
-    }
-}
 
 /// What both renderers sample for one lighting: the environment itself (seen where rays miss
 /// and behind transparent objects), its diffuse irradiance over pi, and one specular map per
@@ -287,49 +149,23 @@ fn filtered(
     }
 }
 
-/// What loading an environment file found.
-#[derive(Debug, Clone, serde::Serialize)]
-pub struct EnvReport {
-    pub file: String,
-    /// `rgb`, `basis` (version 1: three ColorChecker coefficients and a sun), `basis-k` (the
-    /// K-spectrum form) or `spectral`.
-    pub kind: &'static str,
-    pub input_size: [usize; 2],
-    /// The light the map's spectra were made with: `--light` for an RGB map (converted here),
-    /// the header's for a file from `specmap convert`.
-    pub light: String,
-    /// Whether `--light` changed the lighting (only an RGB map's).
-    pub light_used: bool,
-    pub sun_spd: String,
-    /// The sun taken out as a directional light (None: no sun found).
-    pub sun_direction: Option<[f64; 3]>,
-    pub sun_irradiance: Option<f64>,
-    /// How many spectra the map's coefficients expand with.
-    pub spectra: usize,
-    /// A spectral map: how well its own spectra hold it.
-    pub projection: Option<crate::envmap::convert::own_basis::Projection>,
-}
-
-/// The sun SPD given to sun pixels of an RGB map converted here: CIE D65, as in the paper.
-pub const SUN_SPD: &str = "D65";
-
 /// Loads an environment map file as a lighting: an RGB EXR/HDR (converted on the fly with
 /// `light` as the main light, exact mode, the sun found and given D65), or a file from
 /// `specmap convert`, lit by the spectra it holds whatever `light` says
-/// ([`super::own`]: a basis EXR of either version, or a spectral EXR projected onto its own
+/// ([`super::own_spectra`]: a basis EXR of either version, or a spectral EXR projected onto its own
 /// principal components). The sun becomes a directional light and leaves the map.
 pub fn load(path: &Path, light: &str) -> Result<(Lighting, EnvReport)> {
     let channels = exr_channels(path).unwrap_or_default();
     let has = |n: &str| channels.iter().any(|c| c == n);
     if has("k00") {
-        super::own::load_basis_k(path)
+        own_spectra::load_basis_k(path)
     } else if has("c_R") && has("c_G") && has("c_B") {
         load_basis(path)
     } else if channels
         .iter()
         .any(|c| files::parse_spectral_channel_name(c).is_some())
     {
-        super::own::load_spectral(path, super::own::Spectra::Own)
+        own_spectra::load_spectral(path, Spectra::Own)
     } else {
         load_rgb(path, light)
     }
@@ -387,18 +223,6 @@ fn sanitize(path: &Path, img: &mut RgbImage) -> Result<()> {
         }
     }
     Ok(())
-}
-
-/// The largest radiance an environment may hold: far above any photograph (the sun is about
-/// 1e9 cd/m^2), far below where f32 products of spectra and filters overflow (3.4e38).
-pub const MAX_RADIANCE: f64 = 1e18;
-
-pub(super) fn too_bright(path: &Path, x: usize, y: usize, v: f64) -> Error {
-    Error::invalid(format!(
-        "{}: pixel ({x}, {y}) value {v:e} exceeds {MAX_RADIANCE:e}, beyond what the renderer's \
-         f32 arithmetic carries; scale the map down (e.g. convert it with an exposure)",
-        path.display()
-    ))
 }
 
 /// Sum of `s * omega` and the energy-weighted mean direction of the pixels `s` (a value per
@@ -709,26 +533,6 @@ fn load_basis(path: &Path) -> Result<(Lighting, EnvReport)> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn texel_centres_sample_to_themselves_and_solid_angles_tile_the_sphere() {
-        let (w, h) = (16, 8);
-        let m = CoeffMap {
-            width: w,
-            height: h,
-            groups: 1,
-            texels: (0..w * h).map(|i| [i as f32, 0.0, 0.0, 1.0]).collect(),
-        };
-        for y in 0..h {
-            for x in 0..w {
-                let v = m.sample(direction(w, h, x, y));
-                assert!((v[0] - (y * w + x) as f64).abs() < 1e-6, "({x},{y}) {v:?}");
-                assert!((v[3] - 1.0).abs() < 1e-12);
-            }
-        }
-        let total: f64 = (0..h).map(|y| w as f64 * solid_angle(w, h, y)).sum();
-        assert!((total - 4.0 * PI).abs() < 1e-12);
-    }
 
     #[test]
     fn prefiltering_keeps_a_constant_environment_constant() {

@@ -11,7 +11,7 @@
 //!   S_j(lambda)`. For an RGB map or a uniform light (GUIDE.md) K = 4: `S_0..2 = B_j` the fitted
 //!   basis spectra of the main light and `S_3 = E` the sun's (or, for a uniform light, the main
 //!   light's) SPD, all scaled to luminance Y = 1 on the render's wavelengths. For a spectral or
-//!   basis map the `S_j` are the map's own spectra ([`env::own`]: the K spectra a basis file
+//!   basis map the `S_j` are the map's own spectra ([`own_spectra`]: the K spectra a basis file
 //!   stores, or a spectral file's principal components), so the render does not depend on
 //!   `--light`. Lighting integrals are taken in coefficient space on
 //!   the CPU ([`env`]): a diffuse irradiance map `D(N) = 1/pi int L max(N.w, 0) dw` and, per
@@ -36,19 +36,30 @@
 //! Both backends consume the same [`prepare::Prepared`] data (f32 spectra, maps and objects); the
 //! CPU computes in f64 with the thin-film module itself, the GPU in f32 with a WGSL port of it.
 
+pub mod candidates;
 pub mod cpu;
 pub mod env;
+pub mod env_report;
 pub mod fingerprint;
 pub mod gpu;
+pub mod gpu_layout;
 pub mod image;
-pub mod own;
+pub mod latlong;
+pub mod own_spectra;
 pub mod plan;
 mod prefiltered;
 pub mod prepare;
 pub mod presets;
-pub mod rows;
+pub mod radiance_limit;
 pub mod stimuli;
 pub mod sweep;
+
+/// The old name of [`candidates`], kept for code that imports `render::rows`.
+#[doc(hidden)]
+pub use self::candidates as rows;
+/// The old name of [`own_spectra`], kept for code that imports `render::own`.
+#[doc(hidden)]
+pub use self::own_spectra as own;
 
 pub use self::image::{compare, Comparison, Image};
 pub use presets::Preset;

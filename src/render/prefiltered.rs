@@ -4,7 +4,7 @@
 //! lavapipe, against nothing that depends on the film). Keyed by the map's `Arc` (a map is
 //! never changed once built) and the lobe; entries of maps no longer alive are dropped.
 
-use super::env::{CoeffMap, Maps};
+use super::latlong::{CoeffMap, Maps};
 use std::sync::{Arc, Mutex, Weak};
 
 /// Which filtered map: the diffuse one, or the specular one of a shininess (its bits).

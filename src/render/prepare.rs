@@ -3,7 +3,12 @@
 //! objects, in the `#[repr(C)]` layout the WGSL shader declares. The CPU renderer reads the same
 //! arrays, so both backends see the same numbers.
 
+use super::candidates;
 use super::env::{self, CoeffMap};
+pub use super::gpu_layout::{
+    GpuLighting, GpuMaterial, GpuObject, Params, CYLINDER_X, HAS_DIFFUSE, HAS_FILM,
+    HIDE_BACKGROUND, QUAD, SPHERE, TRANSPARENT,
+};
 use super::{Backdrop, LightSpectra, Lighting, Scene, Shape, Spectral, MAX_LAYERS};
 use crate::colorimetry::RgbSpace;
 use crate::error::{Error, Result};
@@ -11,91 +16,6 @@ use crate::quadrature::Quadrature;
 use crate::spectrum::Interpolation;
 use crate::thinfilm::{Film, Index, Stack};
 use crate::tradeoff::sample;
-use bytemuck::{Pod, Zeroable};
-
-/// Object kinds (`GpuObject::kind`).
-pub const SPHERE: u32 = 0;
-pub const CYLINDER_X: u32 = 1;
-pub const QUAD: u32 = 2;
-
-/// Material flags.
-pub const TRANSPARENT: u32 = 1;
-pub const HAS_FILM: u32 = 2;
-pub const HAS_DIFFUSE: u32 = 4;
-
-/// `Params::flags`: rays that miss every object are black, not the environment.
-pub const HIDE_BACKGROUND: u32 = 1;
-
-/// Frame constants (a uniform buffer).
-#[repr(C)]
-#[derive(Debug, Clone, Copy, Pod, Zeroable)]
-pub struct Params {
-    pub width: u32,
-    pub height: u32,
-    pub n_wl: u32,
-    pub n_objects: u32,
-    pub background: u32,
-    /// Offset in `spectra` of the quadrature's x, y, z weights over `sum w_y` (n_wl each).
-    pub cmf_offset: u32,
-    pub wl_offset: u32,
-    /// [`HIDE_BACKGROUND`].
-    pub flags: u32,
-    /// World x, y of the image centre, world size of a pixel, and the tangent of half the
-    /// vertical field of view the background is seen with (0: straight down −Z).
-    pub view: [f32; 4],
-    /// XYZ (Y = 1) -> linear RGB, rows (w unused).
-    pub rgb: [[f32; 4]; 3],
-    /// Camera to world for map lookups ([`Scene::orientation`]), rows (w unused).
-    pub orientation: [[f32; 4]; 3],
-}
-
-#[repr(C)]
-#[derive(Debug, Clone, Copy, Pod, Zeroable)]
-pub struct GpuObject {
-    pub kind: u32,
-    pub material: u32,
-    pub lighting: u32,
-    /// Index in `maps` of the specular map for this object's shininess and lighting.
-    pub spec_map: u32,
-    /// Centre xyz, radius (quad: unused).
-    pub p0: [f32; 4],
-    /// Quad: half width, half height; cylinder: half length.
-    pub p1: [f32; 4],
-    /// Thickness ramp x0, x1, s0, s1.
-    pub ramp: [f32; 4],
-    /// [has_ramp, 0, 0, 0].
-    pub flags: [u32; 4],
-}
-
-#[repr(C)]
-#[derive(Debug, Clone, Copy, Pod, Zeroable)]
-pub struct GpuMaterial {
-    pub flags: u32,
-    pub n_layers: u32,
-    /// Offset of R_d in `spectra`.
-    pub diffuse_offset: u32,
-    /// Offset of the film table: for medium m (0 ambient, 1..=L layers, L+1 substrate), n at
-    /// `film_offset + 2 m n_wl + i`, k at `film_offset + (2 m + 1) n_wl + i`.
-    pub film_offset: u32,
-    /// kd, ks, shininess, unused.
-    pub coef: [f32; 4],
-    /// Layer thicknesses in nm.
-    pub thickness: [[f32; 4]; 2],
-}
-
-#[repr(C)]
-#[derive(Debug, Clone, Copy, Pod, Zeroable)]
-pub struct GpuLighting {
-    /// Offset of the first spectrum; the other `4 groups - 1` follow, n_wl apart.
-    pub spectra: u32,
-    pub diffuse_map: u32,
-    pub background_map: u32,
-    pub has_sun: u32,
-    /// Direction to the sun xyz, irradiance.
-    pub sun: [f32; 4],
-    /// Groups of four coefficients per texel, offset of the sun's SPD, unused.
-    pub layout: [u32; 4],
-}
 
 /// The CPU's own copy of a film: the thin-film module's stack and its per-wavelength films.
 #[derive(Debug, Clone)]
@@ -119,7 +39,7 @@ pub struct Prepared {
     /// [offset in texels, width, height, 0].
     pub maps: Vec<[u32; 4]>,
     pub texels: Vec<[f32; 4]>,
-    /// Per pixel row and band, the objects it can hit ([`super::rows`]).
+    /// Per pixel row and band, the objects it can hit ([`super::candidates`]).
     pub rows: Vec<u32>,
     pub wavelengths_nm: Vec<f64>,
     /// Per material (CPU only).
@@ -463,7 +383,7 @@ impl Prepared {
                 .orientation
                 .map(|r| [r[0] as f32, r[1] as f32, r[2] as f32, 0.0]),
         };
-        let rows = super::rows::index(&objects, &params);
+        let rows = candidates::index(&objects, &params);
         Ok(Prepared {
             params,
             spectra,

@@ -14,7 +14,7 @@
 //! array, then the object indices; the objects of row `y`, band `b` are
 //! `index[index[t]..index[t + 1]]` with `t = y * bands + b` ([`bands`] of the width).
 
-use super::prepare::{GpuObject, Params, CYLINDER_X, QUAD, SPHERE};
+use super::gpu_layout::{GpuObject, Params, CYLINDER_X, QUAD, SPHERE};
 
 /// Pixels per band (`BAND` in gpu.wgsl).
 pub const BAND: usize = 8;
@@ -142,7 +142,7 @@ mod tests {
 
     /// The index is worth having: at the bench's 96x64 a chart pixel tests 2.5 of the 84
     /// objects, against 10 for its row's (the union of the row's bands). Printed with
-    /// `cargo test --lib rows -- --nocapture`.
+    /// `cargo test --lib candidates -- --nocapture`.
     #[test]
     fn a_chart_pixel_tests_a_few_objects() {
         let q = Quadrature::meyer(crate::colorimetry::Observer::Cie1931).unwrap();

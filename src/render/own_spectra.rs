@@ -1,7 +1,7 @@
 //! Lighting from the spectra a map holds: a spectral OpenEXR (from `specmap convert` or any other
 //! tool) or a basis OpenEXR of the K-spectrum form, whatever `--light` says.
 //!
-//! A spectral file's pixels are averaged into the renderer's lat-long ([`env::SOURCE_ROWS`] rows;
+//! A spectral file's pixels are averaged into the renderer's lat-long ([`SOURCE_ROWS`] rows;
 //! each pixel adds its spectrum times its solid angle to the texel its centre falls in), the sun's
 //! pixels apart: they become the directional light, with the mean of their own spectra as its
 //! SPD. The texels' spectra are then projected onto their own principal components
@@ -10,7 +10,9 @@
 //! share for a foreign file. [`Spectra::Full`] keeps every band instead (K = N, no projection):
 //! the reference the projection is tested against.
 
-use super::env::{self, too_bright, CoeffMap, EnvReport, MAX_RADIANCE};
+use super::env_report::{EnvReport, SUN_SPD};
+use super::latlong::{self, CoeffMap, Maps, BACKGROUND_ROWS, SOURCE_ROWS};
+use super::radiance_limit::{too_bright, MAX_RADIANCE};
 use super::{Environment, LightSpectra, Lighting, Sun};
 use crate::colorimetry::RgbSpace;
 use crate::envmap::convert::own_basis::{
@@ -126,7 +128,7 @@ fn rows_for(used: usize, max: usize) -> usize {
     ((latlong_rows / 2.0).floor() as usize).clamp(1, max)
 }
 
-/// The lighting's texels and the background's ([`env::Maps`]), filled together.
+/// The lighting's texels and the background's ([`Maps`]), filled together.
 struct TexelPair {
     light: Texels,
     seen: Texels,
@@ -135,8 +137,8 @@ struct TexelPair {
 impl TexelPair {
     fn new(used: usize, per: usize) -> TexelPair {
         TexelPair {
-            light: Texels::new(rows_for(used, env::SOURCE_ROWS), per),
-            seen: Texels::new(rows_for(used, env::BACKGROUND_ROWS), per),
+            light: Texels::new(rows_for(used, SOURCE_ROWS), per),
+            seen: Texels::new(rows_for(used, BACKGROUND_ROWS), per),
         }
     }
 
@@ -146,13 +148,13 @@ impl TexelPair {
     }
 
     /// Both as coefficient maps of `k` values a texel, each from its values by `f`.
-    fn pack(self, k: usize, f: impl Fn(&[f64], &mut [f64])) -> env::Maps {
+    fn pack(self, k: usize, f: impl Fn(&[f64], &mut [f64])) -> Maps {
         let per = self.light.per;
         let one = |t: Texels| {
             let (w, h) = (t.w, t.h);
             pack(&t.finish(), per, k, w, h, &f)
         };
-        env::Maps {
+        Maps {
             light: one(self.light),
             seen: one(self.seen),
         }
@@ -317,7 +319,7 @@ pub fn load_spectral(path: &Path, spectra: Spectra) -> Result<(Lighting, EnvRepo
             let (basis, p) = project(&light_values, n, tw, th, &colour)?;
             let f = |s: &[f64], out: &mut [f64]| basis.project(s, out);
             let (sw, sh) = (texels.seen.w, texels.seen.h);
-            let maps = env::Maps {
+            let maps = Maps {
                 light: pack(&light_values, n, basis.len(), tw, th, &f),
                 seen: pack(&texels.seen.finish(), n, basis.len(), sw, sh, &f),
             };
@@ -336,7 +338,7 @@ pub fn load_spectral(path: &Path, spectra: Spectra) -> Result<(Lighting, EnvRepo
         ),
         None => (
             None,
-            crate::data::spectrum(env::SUN_SPD)?.data,
+            crate::data::spectrum(SUN_SPD)?.data,
             "none".to_string(),
         ),
     };
@@ -407,7 +409,7 @@ fn project(
     let mut m = Moments::new(n);
     for t in 0..w * h {
         let s = &values[t * n..(t + 1) * n];
-        m.add(s, env::solid_angle(w, h, t / w), colour.luminance(s));
+        m.add(s, latlong::solid_angle(w, h, t / w), colour.luminance(s));
     }
     let basis = OwnBasis::from_moments(&m, &colour.weights, DEFAULT_DISCARD, MAX_K)?;
     let k = basis.len();
@@ -417,14 +419,14 @@ fn project(
         let s = &values[t * n..(t + 1) * n];
         basis.project(s, &mut c);
         let r = basis.relative_residual(s, &c);
-        let e = env::solid_angle(w, h, t / w) * colour.luminance(s).max(0.0);
+        let e = latlong::solid_angle(w, h, t / w) * colour.luminance(s).max(0.0);
         sum += r * e;
         weight += e;
         if r > worst {
             (worst, at) = (r, t);
         }
     }
-    let d = env::direction(w, h, at % w, at / w);
+    let d = latlong::direction(w, h, at % w, at / w);
     let azimuth = d[0].atan2(d[2]).to_degrees();
     let elevation = d[1].clamp(-1.0, 1.0).asin().to_degrees();
     let mean = if weight > 0.0 { sum / weight } else { 0.0 };
@@ -576,7 +578,7 @@ pub fn load_basis_k(path: &Path) -> Result<(Lighting, EnvReport)> {
         Some((s, spd)) => (Some(*s), spd.clone(), "the file's sun spectrum".to_string()),
         None => (
             None,
-            crate::data::spectrum(env::SUN_SPD)?.data,
+            crate::data::spectrum(SUN_SPD)?.data,
             "none".to_string(),
         ),
     };
