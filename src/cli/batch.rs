@@ -10,7 +10,7 @@ use specmap::envmap::convert::OutputFormat;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
-pub const AFTER_HELP: &str = "\
+pub(crate) const AFTER_HELP: &str = "\
 Examples:
   specmap batch ~/hdri --out-dir ~/hdri-spectral            # every .exr/.hdr below ~/hdri
   specmap batch list.txt --out-dir out --jobs 2 --light auto
@@ -22,7 +22,7 @@ Every convert option applies to every map. A second run converts only what is mi
 of date (other settings, a changed input); out/specmap-batch*.jsonl records every input.";
 
 #[derive(Debug, Args)]
-pub struct BatchArgs {
+pub(crate) struct BatchArgs {
     /// Maps (.exr, .hdr), folders (every map below them, sub-folders kept in the output names)
     /// or text files listing such paths, one a line, relative to the list's own folder.
     #[arg(required = true, value_name = "INPUT")]
@@ -60,7 +60,7 @@ pub struct BatchArgs {
     json: bool,
 }
 
-pub fn run(a: BatchArgs) -> anyhow::Result<()> {
+pub(crate) fn run(a: BatchArgs) -> anyhow::Result<()> {
     if a.options.faces() {
         anyhow::bail!(
             "--in-layout faces: a batch converts one-file maps; convert six-face maps with \

@@ -24,7 +24,7 @@ mod quadrature;
 Examples:
   specmap bench --quick
   specmap bench --report bench/        # bench.md, bench.json, grid.png, film.png, render.png")]
-pub struct BenchArgs {
+pub(crate) struct BenchArgs {
     /// Fewer settings and shorter timings (seconds instead of minutes).
     #[arg(long)]
     quick: bool,
@@ -90,7 +90,7 @@ const REPORT_FILES: [&str; 5] = [
 const LIGHTS: [&str; 6] = ["D65", "A", "FL2", "FL11", "LED-B3", "lps"];
 const RULES: [Rule; 3] = [Rule::Riemann, Rule::Trapezoid, Rule::Simpson];
 
-pub fn run(a: BenchArgs) -> anyhow::Result<()> {
+pub(crate) fn run(a: BenchArgs) -> anyhow::Result<()> {
     // The report folder is checked before the minutes of measuring, not after.
     if let Some(dir) = &a.report {
         if dir.exists() && !dir.is_dir() {

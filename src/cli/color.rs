@@ -21,7 +21,7 @@ Examples:
   specmap color FL2 --range 380:780:5 --rule simpson --observer cie1964
   specmap color lps --tolerance 0.5              # the coarsest step within 0.5 CIEDE2000
   specmap color my_lamp.csv:spd --space rec2020")]
-pub struct ColorArgs {
+pub(crate) struct ColorArgs {
     /// The spectrum: TABLE, TABLE:COLUMN or a CSV path. Alone it is a light (normalised to
     /// Y = 100); with --under it is a reflectance.
     spd: String,
@@ -56,7 +56,7 @@ pub struct ColorArgs {
     json: bool,
 }
 
-pub fn run(a: ColorArgs) -> anyhow::Result<()> {
+pub(crate) fn run(a: ColorArgs) -> anyhow::Result<()> {
     let observer = Observer::from(a.spectral.observer);
     let rule = Rule::from(a.spectral.rule);
     let space = RgbSpace::from(a.space);

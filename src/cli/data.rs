@@ -10,14 +10,14 @@ use specmap::spectrum::{Interpolation, Rule, Tabulated, WavelengthGrid};
 use std::path::PathBuf;
 
 /// The examples of `specmap data --help`; each subcommand shows its own.
-pub const EXAMPLES: &str = "\
+pub(crate) const EXAMPLES: &str = "\
 Examples:
   specmap data list
   specmap data show D65 --range 380:780:5 --plot d65.png
   specmap data show colorchecker:red --format json";
 
 #[derive(Debug, Subcommand)]
-pub enum DataCommand {
+pub(crate) enum DataCommand {
     /// The built-in tables by kind (cmf, illuminant, light, reflectance).
     #[command(after_help = "\
 Examples:
@@ -39,7 +39,7 @@ Examples:
   specmap data show colorchecker:red --format json
   specmap data show FL2 --range 380:780:1 --interp linear --plot fl2.svg
   specmap data show my_lamp.csv --range 400:700:10")]
-pub struct ShowArgs {
+pub(crate) struct ShowArgs {
     /// TABLE, TABLE:COLUMN or a CSV path.
     name: String,
     /// Resample onto START:END:STEP nm (e.g. 380:780:5); default: the published wavelengths.
@@ -70,7 +70,7 @@ enum InterpArg {
     Cie167,
 }
 
-pub fn run(cmd: DataCommand) -> anyhow::Result<()> {
+pub(crate) fn run(cmd: DataCommand) -> anyhow::Result<()> {
     match cmd {
         DataCommand::List { json } => list(json),
         DataCommand::Show(a) => show(a),

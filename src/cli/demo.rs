@@ -40,7 +40,7 @@ Examples:
   specmap demo
   specmap demo -o /tmp/demo --quick
   specmap demo --env envmaps/forest.exr --backend cpu --json")]
-pub struct DemoArgs {
+pub(crate) struct DemoArgs {
     /// Folder for index.html, its images and the converted maps (created if missing).
     #[arg(short, long, value_name = "DIR", default_value = "out/demo")]
     output: PathBuf,
@@ -122,68 +122,68 @@ impl Sizes {
 
 /// One fitted mode and its round trip over the 17^3 RGB grid.
 pub(super) struct FitRow {
-    pub fit: fit::Fit,
-    pub round_trip: fit::RoundTrip,
+    pub(crate) fit: fit::Fit,
+    pub(crate) round_trip: fit::RoundTrip,
 }
 
 /// The lights of the demo's map, drawn over it.
 pub(super) struct Inspected {
-    pub lights: Vec<specmap::envmap::scene::Light>,
-    pub overlay: String,
-    pub command: String,
+    pub(crate) lights: Vec<specmap::envmap::scene::Light>,
+    pub(crate) overlay: String,
+    pub(crate) command: String,
 }
 
 /// A converted map and its file round trip.
 pub(super) struct Converted {
-    pub report: ConvertReport,
-    pub file: String,
-    pub round_trip: FileRoundTrip,
-    pub heatmap: String,
-    pub command: String,
-    pub roundtrip_command: String,
+    pub(crate) report: ConvertReport,
+    pub(crate) file: String,
+    pub(crate) round_trip: FileRoundTrip,
+    pub(crate) heatmap: String,
+    pub(crate) command: String,
+    pub(crate) roundtrip_command: String,
 }
 
 /// One rendered preset.
 pub(super) struct Render {
-    pub preset: Preset,
-    pub size: (usize, usize),
-    pub file: String,
-    pub backend: Backend,
-    pub seconds: f64,
-    pub command: String,
+    pub(crate) preset: Preset,
+    pub(crate) size: (usize, usize),
+    pub(crate) file: String,
+    pub(crate) backend: Backend,
+    pub(crate) seconds: f64,
+    pub(crate) command: String,
 }
 
 /// One row of the trade-off table: None where the grid misses the light's lines.
 pub(super) struct TradeoffRow {
-    pub light: String,
-    pub step_nm: f64,
-    pub samples: usize,
-    pub rule: Rule,
-    pub measurement: Option<Measurement>,
+    pub(crate) light: String,
+    pub(crate) step_nm: f64,
+    pub(crate) samples: usize,
+    pub(crate) rule: Rule,
+    pub(crate) measurement: Option<Measurement>,
 }
 
 /// Everything the page shows.
 pub(super) struct Run {
-    pub quick: bool,
-    pub env: String,
-    pub dir: PathBuf,
-    pub fits: Vec<FitRow>,
-    pub basis_plot: String,
-    pub fit_commands: [String; 2],
-    pub converted: Converted,
-    pub paper: Converted,
-    pub inspected: Inspected,
-    pub renderer: String,
-    pub adapter: Option<AdapterReport>,
-    pub renders: Vec<Render>,
-    pub render_spectral: Spectral,
-    pub tradeoff: Vec<TradeoffRow>,
+    pub(crate) quick: bool,
+    pub(crate) env: String,
+    pub(crate) dir: PathBuf,
+    pub(crate) fits: Vec<FitRow>,
+    pub(crate) basis_plot: String,
+    pub(crate) fit_commands: [String; 2],
+    pub(crate) converted: Converted,
+    pub(crate) paper: Converted,
+    pub(crate) inspected: Inspected,
+    pub(crate) renderer: String,
+    pub(crate) adapter: Option<AdapterReport>,
+    pub(crate) renders: Vec<Render>,
+    pub(crate) render_spectral: Spectral,
+    pub(crate) tradeoff: Vec<TradeoffRow>,
     /// (step, seconds)
-    pub seconds: Vec<(&'static str, f64)>,
-    pub demo_command: String,
+    pub(crate) seconds: Vec<(&'static str, f64)>,
+    pub(crate) demo_command: String,
 }
 
-pub fn run(a: DemoArgs) -> anyhow::Result<()> {
+pub(crate) fn run(a: DemoArgs) -> anyhow::Result<()> {
     let t_all = Instant::now();
     let env_path = resolve_env(a.env.as_deref())?;
     let env_str = env_path

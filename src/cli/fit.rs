@@ -17,7 +17,7 @@ Examples:
   specmap fit --light D65,A,FL2,lps --mode paper,exact,nonneg   # a comparison table
   specmap fit --light FL11 --rgb 1,0.5,0.2 --json
   specmap fit --light my_lamp.csv:spd --space acescg --range 380:780:5")]
-pub struct FitArgs {
+pub(crate) struct FitArgs {
     /// The main light: a table name or CSV (e.g. D65, A, FL2, lps). Several, comma-separated,
     /// print a comparison table.
     #[arg(long, value_delimiter = ',', required = true)]
@@ -51,7 +51,7 @@ pub struct FitArgs {
     json: bool,
 }
 
-pub fn run(a: FitArgs) -> anyhow::Result<()> {
+pub(crate) fn run(a: FitArgs) -> anyhow::Result<()> {
     if a.basis.len() != 3 {
         anyhow::bail!(
             "--basis takes three spectra (for R, G and B), comma-separated; got {}: {}",

@@ -32,7 +32,7 @@ Examples:
   specmap render --scene ball --env envmaps/sunrise.exr --orbit 120,15 --zoom 1.5 -o turned.png
   specmap render --scene ball --film 1.38:100,2.1:130 --substrate bk7 -o coated.png
   specmap render --scene chart --size 384x256 --sweep 4,9,17,34,81,340 --sweep-out sweep/")]
-pub struct RenderArgs {
+pub(crate) struct RenderArgs {
     /// The scene preset (the paper's figures 6-9).
     #[arg(long, value_enum, default_value_t = SceneArg::Ball)]
     pub(crate) scene: SceneArg,
@@ -375,7 +375,7 @@ impl RenderArgs {
     }
 }
 
-pub fn run(mut a: RenderArgs) -> anyhow::Result<()> {
+pub(crate) fn run(mut a: RenderArgs) -> anyhow::Result<()> {
     if !(a.exposure.is_finite() && a.exposure.abs() <= 64.0) {
         anyhow::bail!(
             "--exposure {}: stops must be between -64 and 64",

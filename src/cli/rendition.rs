@@ -13,7 +13,7 @@ Examples:
   specmap rendition tests/data/truth/interior_fl2.spectral.exr fl2.exr
   specmap rendition truth.spectral.exr converted.exr --normals up,px,nx,pz,nz --json
   specmap rendition truth.spectral.exr converted.exr --normals 0:1:1 --patches my_patches.csv")]
-pub struct RenditionArgs {
+pub(crate) struct RenditionArgs {
     /// The truth: a spectral OpenEXR (Fichet 2021 layout) whose spectra are known.
     truth: PathBuf,
     /// The reconstruction of the same scene, e.g. `specmap convert` of its RGB map.
@@ -62,7 +62,7 @@ fn describe(m: &MapSummary) -> String {
     )
 }
 
-pub fn run(a: RenditionArgs) -> anyhow::Result<()> {
+pub(crate) fn run(a: RenditionArgs) -> anyhow::Result<()> {
     let opts = RenditionOptions {
         normals: a.normals.unwrap_or_else(Normal::defaults),
         observer: a.observer.into(),

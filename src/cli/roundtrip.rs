@@ -15,7 +15,7 @@ Examples:
   specmap roundtrip sunrise.spectral.exr
   specmap roundtrip sunrise.spectral.exr --heatmap roundtrip.png --json
   specmap roundtrip sunrise.spectral.exr --observer cie1964 --rule simpson")]
-pub struct RoundtripArgs {
+pub(crate) struct RoundtripArgs {
     /// A spectral OpenEXR (from `specmap convert`, or any Fichet-layout file with R, G, B).
     file: PathBuf,
     /// Write a per-pixel CIEDE2000 heatmap (PNG) with its colour bar and range beneath it.
@@ -50,7 +50,7 @@ enum ScaleArg {
     Linear,
 }
 
-pub fn run(a: RoundtripArgs) -> anyhow::Result<()> {
+pub(crate) fn run(a: RoundtripArgs) -> anyhow::Result<()> {
     let scale = match a.heatmap_scale {
         ScaleArg::Log => Scale::Log,
         ScaleArg::Linear => Scale::Linear,

@@ -28,11 +28,11 @@ pub(crate) enum Sequence {
 /// One frame drawn.
 #[derive(Debug, Clone, serde::Serialize)]
 pub(crate) struct Frame {
-    pub file: String,
+    pub(crate) file: String,
     /// The orbit's yaw, or the thickness scale.
-    pub at: f64,
-    pub prepare_s: f64,
-    pub render_s: f64,
+    pub(crate) at: f64,
+    pub(crate) prepare_s: f64,
+    pub(crate) render_s: f64,
 }
 
 impl Sequence {
@@ -190,11 +190,11 @@ impl Sequence {
 
 /// What a sequence drew, and on what.
 pub(crate) struct SequenceReport<'a> {
-    pub frames: Vec<Frame>,
-    pub seconds: f64,
-    pub quadrature: &'a Quadrature,
-    pub selection: Option<&'a Selection>,
-    pub plan: Option<&'a Plan>,
+    pub(crate) frames: Vec<Frame>,
+    pub(crate) seconds: f64,
+    pub(crate) quadrature: &'a Quadrature,
+    pub(crate) selection: Option<&'a Selection>,
+    pub(crate) plan: Option<&'a Plan>,
 }
 
 impl SequenceReport<'_> {

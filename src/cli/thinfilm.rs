@@ -22,7 +22,7 @@ Examples:
   specmap thinfilm --layers 2.3:350 --substrate 1.45 --angle 60 --pol s --json
   specmap thinfilm --layers 1.38:100,2.1:130 --substrate bk7 --plot film.png
   specmap thinfilm --layers 1.33:400 --substrate 1.0 --under A   # a soap film in air")]
-pub struct ThinfilmArgs {
+pub(crate) struct ThinfilmArgs {
     /// Layers from the ambient side, INDEX:THICKNESS_NM[,INDEX:THICKNESS_NM...]; empty for a bare
     /// interface.
     #[arg(long, value_name = "N:D[,N:D...]", default_value = "")]
@@ -157,7 +157,7 @@ fn layers(spec: &str) -> anyhow::Result<Vec<Layer>> {
         .collect()
 }
 
-pub fn run(a: ThinfilmArgs) -> anyhow::Result<()> {
+pub(crate) fn run(a: ThinfilmArgs) -> anyhow::Result<()> {
     if let Some(p) = &a.plot {
         super::guard::Guard::new()
             .spec_list("--layers", &a.layers)

@@ -20,19 +20,19 @@ use std::time::Instant;
 /// What the quadrature is chosen for: the renderer that will draw (None: the CPU), how many
 /// frames, and the first of them (a frame's cost is measured on it).
 pub(crate) struct Serving<'a> {
-    pub gpu: Option<&'a Gpu>,
-    pub frames: usize,
-    pub first: &'a Scene,
+    pub(crate) gpu: Option<&'a Gpu>,
+    pub(crate) frames: usize,
+    pub(crate) first: &'a Scene,
 }
 
 /// The quadrature chosen, what `--tolerance` chose (and how, when it planned), and the first
 /// frame prepared on it where measuring its cost did that already (on the CPU, when the plan
 /// keeps the uniform grid it measured).
 pub(crate) struct Chosen {
-    pub quadrature: Quadrature,
-    pub selection: Option<Selection>,
-    pub plan: Option<Plan>,
-    pub prepared: Option<Prepared>,
+    pub(crate) quadrature: Quadrature,
+    pub(crate) selection: Option<Selection>,
+    pub(crate) plan: Option<Plan>,
+    pub(crate) prepared: Option<Prepared>,
 }
 
 /// The quadrature of `--quadrature`, `--tolerance` (and `--max-nodes`, `--fit-budget`),

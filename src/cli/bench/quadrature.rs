@@ -13,9 +13,9 @@ use specmap::render::gpu::Gpu;
 use specmap::render::{sweep, Backend, Preset, Scene};
 
 /// The lights of the table (the chart keeps its own three).
-pub const LIGHTS: [&str; 7] = ["D65", "A", "FL2", "FL11", "hps", "lps", "LED-B3"];
+pub(crate) const LIGHTS: [&str; 7] = ["D65", "A", "FL2", "FL11", "hps", "lps", "LED-B3"];
 /// The tolerances of the table.
-pub const TOLERANCES: [f64; 2] = [0.5, 0.1];
+pub(crate) const TOLERANCES: [f64; 2] = [0.5, 0.1];
 
 /// Frames per quadrature: at least 5 rounds, more while a case's frames have taken under two
 /// seconds (the short frames, where a slow spell weighs most), at most 40.
@@ -26,7 +26,7 @@ const ROUNDS: sweep::Rounds = sweep::Rounds {
 };
 
 /// The photographs the ball is also lit by (the repository's envmaps/, converted under D65).
-pub const MAPS: [&str; 2] = ["sunrise.exr", "forest.exr"];
+pub(crate) const MAPS: [&str; 2] = ["sunrise.exr", "forest.exr"];
 
 /// The cases: (preset, light or map), each image `width` pixels wide.
 fn cases(quick: bool) -> Vec<(Preset, &'static str)> {
@@ -114,7 +114,7 @@ fn methods(scene: &Scene, quick: bool) -> anyhow::Result<Vec<Method>> {
 }
 
 /// Measures every case.
-pub fn rows(quick: bool, gpu: Option<&Gpu>, cpu: bool) -> anyhow::Result<Vec<Row>> {
+pub(crate) fn rows(quick: bool, gpu: Option<&Gpu>, cpu: bool) -> anyhow::Result<Vec<Row>> {
     let width = if quick { 24 } else { 96 };
     let rounds = if quick {
         sweep::Rounds {
@@ -187,7 +187,7 @@ pub fn rows(quick: bool, gpu: Option<&Gpu>, cpu: bool) -> anyhow::Result<Vec<Row
 
 /// The section's table: per case and method, nodes, estimate, image error, frame times and the
 /// speed-up over the uniform grid chosen for the same tolerance.
-pub fn markdown(rows: &[Row]) -> String {
+pub(crate) fn markdown(rows: &[Row]) -> String {
     let mut out = String::from(
         "| case | quadrature | nodes | estimate dE00 | image max dE00 | image mean dE00 | \
          CPU ms | GPU ms | x faster than uniform (CPU, GPU) | note |\n\

@@ -21,7 +21,7 @@ img.wide{width:100%}
 ";
 
 /// Escapes text for HTML element content and attribute values.
-pub fn esc(s: &str) -> String {
+pub(crate) fn esc(s: &str) -> String {
     let mut o = String::with_capacity(s.len());
     for c in s.chars() {
         match c {
@@ -65,7 +65,7 @@ fn seconds(run: &Run, step: &str) -> f64 {
 }
 
 /// The page.
-pub fn html(run: &Run) -> String {
+pub(crate) fn html(run: &Run) -> String {
     let mut o = String::new();
     outln!(
         o,

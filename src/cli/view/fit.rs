@@ -30,10 +30,10 @@ pub(crate) const COVER: f64 = 0.15;
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct Covers {
     /// The settings but [`VIEW_ONLY`]'s.
-    pub key: Vec<(String, String)>,
+    pub(crate) key: Vec<(String, String)>,
     /// The main objects' films as fitted, and the thickness scales covered.
-    pub films: Vec<Option<Film>>,
-    pub scales: (f64, f64),
+    pub(crate) films: Vec<Option<Film>>,
+    pub(crate) scales: (f64, f64),
 }
 
 impl Covers {
@@ -183,10 +183,10 @@ pub(crate) const INTERIM_S: f64 = 2.0;
 
 /// A fit on its own thread.
 pub(crate) struct Running {
-    pub covers: Covers,
-    pub stage: Arc<Mutex<String>>,
-    pub started: Instant,
-    pub result: Receiver<Sent>,
+    pub(crate) covers: Covers,
+    pub(crate) stage: Arc<Mutex<String>>,
+    pub(crate) started: Instant,
+    pub(crate) result: Receiver<Sent>,
 }
 
 /// Starts the fit for `args` (whose mode is [`Mode::Fitted`]); `wake` is called when it ends.

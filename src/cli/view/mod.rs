@@ -33,7 +33,7 @@ A script is a JSON array of steps: {\"set\": {\"film\": \"2.7:300\", \"light\": 
 {\"orbit\": [30, -10]}, {\"zoom\": 1.5}, {\"frames\": 5}, {\"wait\": \"quadrature\"},
 {\"probe\": [256, 200]}, {\"screenshot\": \"a.png\"} (or .exr, linear),
 {\"screenshot_window\": \"w.png\"}, {\"command\": true}.")]
-pub struct ViewArgs {
+pub(crate) struct ViewArgs {
     #[command(flatten)]
     render: RenderArgs,
     /// Replay these steps (a JSON array), then close the window.
@@ -57,7 +57,7 @@ fn no_display() -> Option<String> {
     })
 }
 
-pub fn run(a: ViewArgs) -> anyhow::Result<()> {
+pub(crate) fn run(a: ViewArgs) -> anyhow::Result<()> {
     if a.render.sweep.is_some() {
         anyhow::bail!("--sweep measures stills: use `specmap render --sweep`");
     }

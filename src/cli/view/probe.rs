@@ -12,25 +12,25 @@ use specmap::spectrum::{Rule, WavelengthGrid};
 #[derive(Debug, Clone, serde::Serialize)]
 pub(crate) struct Probe {
     /// Image pixel, x to the right and y down.
-    pub at: [usize; 2],
+    pub(crate) at: [usize; 2],
     /// 380..780 nm at 1 nm, and the pixel's radiance there.
-    pub wavelengths_nm: Vec<f64>,
-    pub radiance: Vec<f64>,
+    pub(crate) wavelengths_nm: Vec<f64>,
+    pub(crate) radiance: Vec<f64>,
     /// The quadrature's nodes.
-    pub nodes_nm: Vec<f64>,
+    pub(crate) nodes_nm: Vec<f64>,
     /// The colour of the 1 nm spectrum: XYZ (a white under the main light has Y = 100), xy,
     /// CIELAB (relative to RGB white), linear sRGB and 8-bit sRGB.
-    pub xyz: [f64; 3],
-    pub xy: [f64; 2],
-    pub lab: [f64; 3],
-    pub rgb_linear: [f64; 3],
-    pub srgb8: [u8; 3],
+    pub(crate) xyz: [f64; 3],
+    pub(crate) xy: [f64; 2],
+    pub(crate) lab: [f64; 3],
+    pub(crate) rgb_linear: [f64; 3],
+    pub(crate) srgb8: [u8; 3],
     /// The pixel on the quadrature in use (linear sRGB), and its CIEDE2000 from the 1 nm one.
-    pub rgb_quadrature: [f64; 3],
-    pub error_de2000: f64,
-    pub view_angle_deg: Option<f64>,
+    pub(crate) rgb_quadrature: [f64; 3],
+    pub(crate) error_de2000: f64,
+    pub(crate) view_angle_deg: Option<f64>,
     /// The film's reflectance at 1 nm, at the pixel's angle.
-    pub film_reflectance: Option<Vec<f64>>,
+    pub(crate) film_reflectance: Option<Vec<f64>>,
 }
 
 /// Probes pixel (x, y) of `scene`, whose frame `p` was prepared for the quadrature in use.

@@ -127,25 +127,25 @@ fn step(v: &Value) -> anyhow::Result<Step> {
 /// One frame, for the report.
 #[derive(Debug, Clone, serde::Serialize)]
 pub(crate) struct FrameRecord {
-    pub ms: f64,
-    pub prepare_ms: f64,
-    pub nodes: usize,
-    pub kind: String,
+    pub(crate) ms: f64,
+    pub(crate) prepare_ms: f64,
+    pub(crate) nodes: usize,
+    pub(crate) kind: String,
     /// Whether a fit was running while the frame was drawn.
-    pub fitting: bool,
+    pub(crate) fitting: bool,
 }
 
 /// What `--json` prints at the end.
 #[derive(Debug, Clone, Default, serde::Serialize)]
 pub(crate) struct Report {
-    pub backend: String,
-    pub first_frame_ms: Option<f64>,
-    pub frames: Vec<FrameRecord>,
-    pub fits: Vec<serde_json::Value>,
-    pub probes: Vec<super::probe::Probe>,
-    pub commands: Vec<String>,
-    pub screenshots: Vec<String>,
-    pub errors: Vec<String>,
+    pub(crate) backend: String,
+    pub(crate) first_frame_ms: Option<f64>,
+    pub(crate) frames: Vec<FrameRecord>,
+    pub(crate) fits: Vec<serde_json::Value>,
+    pub(crate) probes: Vec<super::probe::Probe>,
+    pub(crate) commands: Vec<String>,
+    pub(crate) screenshots: Vec<String>,
+    pub(crate) errors: Vec<String>,
 }
 
 #[cfg(test)]

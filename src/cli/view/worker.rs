@@ -19,13 +19,13 @@ use std::time::Instant;
 /// The wavelengths a frame uses, and what they are called in the status line and report.
 #[derive(Debug, Clone)]
 pub(crate) struct Wavelengths {
-    pub quadrature: Arc<Quadrature>,
+    pub(crate) quadrature: Arc<Quadrature>,
     /// `uniform`, `meyer` or `scene` (fitted), as `render --json` names kinds.
-    pub kind: String,
+    pub(crate) kind: String,
     /// A fitted set's estimate (CIEDE2000 over the scene's stimuli).
-    pub estimate: Option<f64>,
+    pub(crate) estimate: Option<f64>,
     /// Changes whenever the set does.
-    pub id: u64,
+    pub(crate) id: u64,
 }
 
 pub(crate) enum Job {
@@ -44,12 +44,12 @@ pub(crate) enum Job {
 }
 
 pub(crate) struct Frame {
-    pub image: Image,
+    pub(crate) image: Image,
     /// Preparing the scene for the quadrature (0 when the last one was reused) and rendering.
-    pub prepare_ms: f64,
-    pub render_ms: f64,
-    pub nodes: usize,
-    pub kind: String,
+    pub(crate) prepare_ms: f64,
+    pub(crate) render_ms: f64,
+    pub(crate) nodes: usize,
+    pub(crate) kind: String,
 }
 
 pub(crate) enum Done {
