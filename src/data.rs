@@ -98,167 +98,19 @@ impl Table {
 
     /// Parses CSV text. `origin_path` names the file in error messages.
     pub fn parse_csv(text: &str, name: &str, origin: Origin, origin_path: &Path) -> Result<Table> {
-        let err = |line: Option<usize>, message: String| Error::Parse {
-            file: origin_path.to_path_buf(),
-            line,
-            message,
-        };
-        let mut reader = csv::ReaderBuilder::new()
-            .has_headers(false)
-            .comment(Some(b'#'))
-            .flexible(true)
-            .trim(csv::Trim::All)
-            .from_reader(text.as_bytes());
+        let err = CsvErrors { file: origin_path };
+        let mut reader = csv_reader(text);
         let mut records = reader.records();
-        let header =
-            loop {
-                match records.next() {
-                    None => return Err(err(
-                        None,
-                        "empty file: expected a header `wavelength_nm,<column>,...` and data rows"
-                            .into(),
-                    )),
-                    Some(Err(e)) => {
-                        return Err(err(e.position().map(|p| p.line() as usize), e.to_string()))
-                    }
-                    Some(Ok(r)) if r.iter().all(|f| f.is_empty()) => continue,
-                    Some(Ok(r)) => break r,
-                }
-            };
-        let header_line = header.position().map(|p| p.line() as usize);
-        let first = header.get(0).unwrap_or("");
-        if !first.eq_ignore_ascii_case("wavelength_nm") {
-            let hint = if first.parse::<f64>().is_ok() {
-                " (the file has no header row)"
-            } else {
-                ""
-            };
-            return Err(err(
-                header_line,
-                format!(
-                    "the first column must be `wavelength_nm`, found '{first}'{hint}; \
-                     expected a header `wavelength_nm,<column>,...`"
-                ),
-            ));
-        }
-        let columns: Vec<String> = header.iter().skip(1).map(str::to_string).collect();
-        if columns.is_empty() {
-            return Err(err(
-                header_line,
-                "the header names no data column after wavelength_nm".into(),
-            ));
-        }
-        for (i, c) in columns.iter().enumerate() {
-            if c.is_empty() {
-                return Err(err(
-                    header_line,
-                    format!("column {} has an empty name", i + 2),
-                ));
-            }
-            if columns[..i].contains(c) {
-                return Err(err(header_line, format!("column name '{c}' appears twice")));
-            }
-        }
-        let mut wavelengths_nm: Vec<f64> = Vec::new();
-        let mut lines: Vec<usize> = Vec::new();
-        let mut data = vec![Vec::new(); columns.len()];
-        for record in records {
-            let record =
-                record.map_err(|e| err(e.position().map(|p| p.line() as usize), e.to_string()))?;
-            if record.iter().all(|f| f.is_empty()) {
-                continue;
-            }
-            let line = record.position().map(|p| p.line() as usize).unwrap_or(0);
-            if record.len() < columns.len() + 1 {
-                let missing = record.len();
-                return Err(err(
-                    Some(line),
-                    format!(
-                        "missing column {} ('{}'): the row has {} fields, the header {}",
-                        missing + 1,
-                        columns[missing - 1],
-                        record.len(),
-                        columns.len() + 1
-                    ),
-                ));
-            }
-            if record.len() > columns.len() + 1 {
-                return Err(err(
-                    Some(line),
-                    format!(
-                        "the row has {} fields but the header names only {}",
-                        record.len(),
-                        columns.len() + 1
-                    ),
-                ));
-            }
-            let number = |i: usize, field: &str| -> Result<f64> {
-                let col = if i == 0 {
-                    "wavelength_nm"
-                } else {
-                    &columns[i - 1]
-                };
-                let v: f64 = field.parse().map_err(|_| {
-                    err(
-                        Some(line),
-                        format!("column {} ('{col}'): '{field}' is not a number", i + 1),
-                    )
-                })?;
-                if !v.is_finite() {
-                    return Err(err(
-                        Some(line),
-                        format!(
-                            "column {} ('{col}'): {field} is not allowed (values must be finite)",
-                            i + 1
-                        ),
-                    ));
-                }
-                Ok(v)
-            };
-            let w = number(0, &record[0])?;
-            if let (Some(&prev), Some(&prev_line)) = (wavelengths_nm.last(), lines.last()) {
-                if w == prev {
-                    return Err(err(
-                        Some(line),
-                        format!("wavelength {w} nm repeats line {prev_line}"),
-                    ));
-                }
-                if w < prev {
-                    return Err(err(
-                        Some(line),
-                        format!(
-                            "wavelength {w} nm is below {prev} nm on line {prev_line}: \
-                             wavelengths must increase"
-                        ),
-                    ));
-                }
-            }
-            wavelengths_nm.push(w);
-            lines.push(line);
-            for (i, field) in record.iter().enumerate().skip(1) {
-                data[i - 1].push(number(i, field)?);
-            }
-        }
-        if wavelengths_nm.is_empty() {
-            return Err(err(None, "the file has a header but no data rows".into()));
-        }
-        let max = wavelengths_nm[wavelengths_nm.len() - 1];
-        if max < 50.0 || wavelengths_nm[0] <= 0.0 {
-            return Err(err(
-                lines.first().copied(),
-                format!(
-                    "wavelengths {}..{max} do not look like nanometres \
-                     (micrometres? convert them to nm)",
-                    wavelengths_nm[0]
-                ),
-            ));
-        }
+        let header = first_nonblank_record(&mut records, &err)?;
+        let columns = header_columns(&header, &err)?;
+        let rows = read_rows(records, &columns, &err)?;
+        rows.check_nanometres(&err)?;
         Ok(Table {
             name: name.to_string(),
             origin,
             columns,
-            wavelengths_nm,
-            data,
+            wavelengths_nm: rows.wavelengths_nm,
+            data: rows.data,
         })
     }
 
@@ -346,6 +198,252 @@ impl Table {
             self.columns.len(),
             examples.join(", ")
         )))
+    }
+}
+
+/// Builds [`Error::Parse`] errors that name one CSV file.
+struct CsvErrors<'a> {
+    file: &'a Path,
+}
+
+impl CsvErrors<'_> {
+    /// A parse error at `line` (None: the file as a whole).
+    fn at(&self, line: Option<usize>, message: String) -> Error {
+        Error::Parse {
+            file: self.file.to_path_buf(),
+            line,
+            message,
+        }
+    }
+
+    /// The csv crate's own error, at the line it names.
+    fn csv(&self, e: csv::Error) -> Error {
+        self.at(e.position().map(|p| p.line() as usize), e.to_string())
+    }
+}
+
+/// The rows of a table as read: wavelengths, the line each came from, and the columns' values.
+struct Rows {
+    wavelengths_nm: Vec<f64>,
+    lines: Vec<usize>,
+    data: Vec<Vec<f64>>, // data[column][row]
+}
+
+impl Rows {
+    /// An error unless there is a row and the wavelengths look like nanometres.
+    fn check_nanometres(&self, err: &CsvErrors) -> Result<()> {
+        let w = &self.wavelengths_nm;
+        if w.is_empty() {
+            return Err(err.at(None, "the file has a header but no data rows".into()));
+        }
+        let max = w[w.len() - 1];
+        if max < 50.0 || w[0] <= 0.0 {
+            return Err(err.at(
+                self.lines.first().copied(),
+                format!(
+                    "wavelengths {}..{max} do not look like nanometres \
+                     (micrometres? convert them to nm)",
+                    w[0]
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// An error unless `w` (on `line`) is above the previous row's wavelength.
+    fn check_increasing(&self, w: f64, line: usize, err: &CsvErrors) -> Result<()> {
+        let (Some(&prev), Some(&prev_line)) = (self.wavelengths_nm.last(), self.lines.last())
+        else {
+            return Ok(());
+        };
+        if w == prev {
+            return Err(err.at(
+                Some(line),
+                format!("wavelength {w} nm repeats line {prev_line}"),
+            ));
+        }
+        if w < prev {
+            return Err(err.at(
+                Some(line),
+                format!(
+                    "wavelength {w} nm is below {prev} nm on line {prev_line}: \
+                     wavelengths must increase"
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// The CSV reader of a table: no header row of its own, `#` comments, ragged rows allowed
+/// (checked here, with better messages), fields trimmed.
+fn csv_reader(text: &str) -> csv::Reader<&[u8]> {
+    csv::ReaderBuilder::new()
+        .has_headers(false)
+        .comment(Some(b'#'))
+        .flexible(true)
+        .trim(csv::Trim::All)
+        .from_reader(text.as_bytes())
+}
+
+/// True for a row whose every field is empty (a blank line).
+fn is_blank(record: &csv::StringRecord) -> bool {
+    record.iter().all(|f| f.is_empty())
+}
+
+/// The header: the first record that is not blank; an error for an empty file.
+fn first_nonblank_record(
+    records: &mut csv::StringRecordsIter<&[u8]>,
+    err: &CsvErrors,
+) -> Result<csv::StringRecord> {
+    loop {
+        match records.next() {
+            None => {
+                return Err(err.at(
+                    None,
+                    "empty file: expected a header `wavelength_nm,<column>,...` and data rows"
+                        .into(),
+                ))
+            }
+            Some(Err(e)) => return Err(err.csv(e)),
+            Some(Ok(r)) if is_blank(&r) => continue,
+            Some(Ok(r)) => return Ok(r),
+        }
+    }
+}
+
+/// The data columns the header names after `wavelength_nm`: at least one, each named, no name
+/// twice.
+fn header_columns(header: &csv::StringRecord, err: &CsvErrors) -> Result<Vec<String>> {
+    let header_line = header.position().map(|p| p.line() as usize);
+    let first = header.get(0).unwrap_or("");
+    if !first.eq_ignore_ascii_case("wavelength_nm") {
+        let hint = if first.parse::<f64>().is_ok() {
+            " (the file has no header row)"
+        } else {
+            ""
+        };
+        return Err(err.at(
+            header_line,
+            format!(
+                "the first column must be `wavelength_nm`, found '{first}'{hint}; \
+                 expected a header `wavelength_nm,<column>,...`"
+            ),
+        ));
+    }
+    let columns: Vec<String> = header.iter().skip(1).map(str::to_string).collect();
+    if columns.is_empty() {
+        return Err(err.at(
+            header_line,
+            "the header names no data column after wavelength_nm".into(),
+        ));
+    }
+    for (i, c) in columns.iter().enumerate() {
+        if c.is_empty() {
+            return Err(err.at(header_line, format!("column {} has an empty name", i + 2)));
+        }
+        if columns[..i].contains(c) {
+            return Err(err.at(header_line, format!("column name '{c}' appears twice")));
+        }
+    }
+    Ok(columns)
+}
+
+/// Every data row after the header: as many fields as the header, each a finite number, the
+/// wavelengths increasing.
+fn read_rows(
+    records: csv::StringRecordsIter<&[u8]>,
+    columns: &[String],
+    err: &CsvErrors,
+) -> Result<Rows> {
+    let mut rows = Rows {
+        wavelengths_nm: Vec::new(),
+        lines: Vec::new(),
+        data: vec![Vec::new(); columns.len()],
+    };
+    for record in records {
+        let record = record.map_err(|e| err.csv(e))?;
+        if is_blank(&record) {
+            continue;
+        }
+        let line = record.position().map(|p| p.line() as usize).unwrap_or(0);
+        check_field_count(&record, line, columns, err)?;
+        let row = RowFields { line, columns, err };
+        let w = row.number(0, &record[0])?;
+        rows.check_increasing(w, line, err)?;
+        rows.wavelengths_nm.push(w);
+        rows.lines.push(line);
+        for (i, field) in record.iter().enumerate().skip(1) {
+            rows.data[i - 1].push(row.number(i, field)?);
+        }
+    }
+    Ok(rows)
+}
+
+/// An error unless the row on `line` has exactly one field per header column.
+fn check_field_count(
+    record: &csv::StringRecord,
+    line: usize,
+    columns: &[String],
+    err: &CsvErrors,
+) -> Result<()> {
+    if record.len() < columns.len() + 1 {
+        let missing = record.len();
+        return Err(err.at(
+            Some(line),
+            format!(
+                "missing column {} ('{}'): the row has {} fields, the header {}",
+                missing + 1,
+                columns[missing - 1],
+                record.len(),
+                columns.len() + 1
+            ),
+        ));
+    }
+    if record.len() > columns.len() + 1 {
+        return Err(err.at(
+            Some(line),
+            format!(
+                "the row has {} fields but the header names only {}",
+                record.len(),
+                columns.len() + 1
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// One data row's fields, read as numbers with messages that name the line and column.
+struct RowFields<'a> {
+    line: usize,
+    columns: &'a [String],
+    err: &'a CsvErrors<'a>,
+}
+
+impl RowFields<'_> {
+    /// Field `i` (0: the wavelength) as a finite number.
+    fn number(&self, i: usize, field: &str) -> Result<f64> {
+        let col = if i == 0 {
+            "wavelength_nm"
+        } else {
+            &self.columns[i - 1]
+        };
+        let v: f64 = field.parse().map_err(|_| {
+            self.err.at(
+                Some(self.line),
+                format!("column {} ('{col}'): '{field}' is not a number", i + 1),
+            )
+        })?;
+        if !v.is_finite() {
+            return Err(self.err.at(
+                Some(self.line),
+                format!(
+                    "column {} ('{col}'): {field} is not allowed (values must be finite)",
+                    i + 1
+                ),
+            ));
+        }
+        Ok(v)
     }
 }
 

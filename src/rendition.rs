@@ -333,6 +333,39 @@ pub fn compare(
     reconstructed: &MapIrradiance,
     opts: &RenditionOptions,
 ) -> Result<Rendition> {
+    check_normals(truth, reconstructed, opts)?;
+    let grid = shared_grid(&truth.wavelengths_nm, &reconstructed.wavelengths_nm)?;
+    let cmfs = Cmfs::new(opts.observer, &grid)?;
+    let table = Table::load(&opts.patches)?;
+    let bench = Bench {
+        cmfs,
+        patches: patches_on(&table, &grid)?,
+        grid,
+        rule: opts.rule,
+        d65: Xyz::from_xy(D65_XY),
+    };
+    let normals = opts
+        .normals
+        .iter()
+        .enumerate()
+        .map(|(k, normal)| bench.at_normal(truth, reconstructed, k, normal))
+        .collect::<Result<Vec<_>>>()?;
+    Ok(summarise(
+        truth,
+        reconstructed,
+        opts,
+        &bench,
+        &table,
+        normals,
+    ))
+}
+
+/// An error unless there are normals and both maps were integrated at as many.
+fn check_normals(
+    truth: &MapIrradiance,
+    reconstructed: &MapIrradiance,
+    opts: &RenditionOptions,
+) -> Result<()> {
     if opts.normals.is_empty() {
         return Err(Error::invalid("no normals to light the patches at"));
     }
@@ -346,57 +379,79 @@ pub fn compare(
             )));
         }
     }
-    let grid = shared_grid(&truth.wavelengths_nm, &reconstructed.wavelengths_nm)?;
-    let cmfs = Cmfs::new(opts.observer, &grid)?;
-    let table = Table::load(&opts.patches)?;
-    let patches: Vec<(String, Spectrum)> = (0..table.columns().len())
+    Ok(())
+}
+
+/// Every column of the patch table, named, resampled smoothly onto `grid`.
+fn patches_on(table: &Table, grid: &WavelengthGrid) -> Result<Vec<(String, Spectrum)>> {
+    (0..table.columns().len())
         .map(|i| {
             Ok((
                 table.columns()[i].clone(),
-                table.column_at(i)?.resample(&grid, Interpolation::SMOOTH),
+                table.column_at(i)?.resample(grid, Interpolation::SMOOTH),
             ))
         })
-        .collect::<Result<_>>()?;
-    let d65 = Xyz::from_xy(D65_XY);
-    let resample = |m: &MapIrradiance, k: usize| -> Result<Spectrum> {
+        .collect()
+}
+
+/// What every normal is measured with: the shared grid, its CMFs, the patches on it, the rule
+/// and the D65 white everything is adapted to.
+struct Bench {
+    cmfs: Cmfs,
+    patches: Vec<(String, Spectrum)>,
+    grid: WavelengthGrid,
+    rule: Rule,
+    d65: Xyz,
+}
+
+impl Bench {
+    /// Map `m`'s irradiance at normal `k`, resampled (linearly, as a light) onto the grid.
+    fn irradiance(&self, m: &MapIrradiance, k: usize) -> Result<Spectrum> {
         Ok(
             Tabulated::new(m.wavelengths_nm.clone(), m.irradiance[k].clone())?
-                .resample(&grid, Interpolation::LIGHT),
+                .resample(&self.grid, Interpolation::LIGHT),
         )
-    };
-    let mut normals = Vec::with_capacity(opts.normals.len());
-    for (k, normal) in opts.normals.iter().enumerate() {
-        let et = resample(truth, k)?;
-        let er = resample(reconstructed, k)?;
-        let context = |m: &MapIrradiance, e: Error| {
+    }
+
+    /// The white of irradiance `e` of map `m`, its errors naming the normal and the map.
+    fn white(&self, e: &Spectrum, m: &MapIrradiance, normal: &Normal) -> Result<White> {
+        white_of(&self.cmfs, e, self.rule).map_err(|e| {
             Error::invalid(format!(
                 "normal {} ({:.3}, {:.3}, {:.3}): {}: {e}",
                 normal.name, normal.direction[0], normal.direction[1], normal.direction[2], m.file
             ))
-        };
-        let wt = white_of(&cmfs, &et, opts.rule).map_err(|e| context(truth, e))?;
-        let wr = white_of(&cmfs, &er, opts.rule).map_err(|e| context(reconstructed, e))?;
+        })
+    }
+
+    /// CIELAB against D65 of `xyz` seen under `white`, adapted to D65 by CAT02.
+    fn adapted_lab(&self, xyz: Xyz, white: Xyz) -> Lab {
+        Lab::from_xyz(Cat::Cat02.adapt(xyz, white, self.d65), self.d65)
+    }
+
+    /// Everything measured at normal `k`: the whites, the brightness ratio and every patch.
+    fn at_normal(
+        &self,
+        truth: &MapIrradiance,
+        reconstructed: &MapIrradiance,
+        k: usize,
+        normal: &Normal,
+    ) -> Result<NormalResult> {
+        let et = self.irradiance(truth, k)?;
+        let er = self.irradiance(reconstructed, k)?;
+        let wt = self.white(&et, truth, normal)?;
+        let wr = self.white(&er, reconstructed, normal)?;
         let irradiance_ratio =
-            cmfs.integrate(&er, opts.rule)?[1] / cmfs.integrate(&et, opts.rule)?[1];
-        let lab_t = |xyz: Xyz| Lab::from_xyz(Cat::Cat02.adapt(xyz, wt.xyz, d65), d65);
-        let lab_r = |xyz: Xyz| Lab::from_xyz(Cat::Cat02.adapt(xyz, wr.xyz, d65), d65);
-        let white_de2000 = delta_e_2000(lab_t(wt.xyz), lab_t(wr.xyz));
-        let mut results = Vec::with_capacity(patches.len());
-        for (name, rho) in &patches {
-            let t = lab_t(cmfs.reflectance_xyz(rho, &et, opts.rule)?);
-            let r = lab_r(cmfs.reflectance_xyz(rho, &er, opts.rule)?);
-            results.push(PatchResult {
-                patch: name.clone(),
-                truth_lab: t,
-                reconstructed_lab: r,
-                de2000: delta_e_2000(t, r),
-            });
-        }
+            self.cmfs.integrate(&er, self.rule)?[1] / self.cmfs.integrate(&et, self.rule)?[1];
+        let white_de2000 = delta_e_2000(
+            self.adapted_lab(wt.xyz, wt.xyz),
+            self.adapted_lab(wr.xyz, wt.xyz),
+        );
+        let results = self.patch_results([(&et, wt.xyz), (&er, wr.xyz)])?;
         let worst = results
             .iter()
             .max_by(|a, b| a.de2000.total_cmp(&b.de2000))
             .expect("at least one patch");
-        normals.push(NormalResult {
+        Ok(NormalResult {
             normal: normal.clone(),
             truth_white: wt,
             reconstructed_white: wr,
@@ -406,17 +461,47 @@ pub fn compare(
             max_de2000: worst.de2000,
             max_patch: worst.patch.clone(),
             patches: results,
-        });
+        })
     }
+
+    /// Each patch under the truth's and the reconstruction's irradiance (each with its own
+    /// white), adapted to D65 and compared in CIEDE2000.
+    fn patch_results(&self, lit: [(&Spectrum, Xyz); 2]) -> Result<Vec<PatchResult>> {
+        let [(et, wt), (er, wr)] = lit;
+        self.patches
+            .iter()
+            .map(|(name, rho)| {
+                let t = self.adapted_lab(self.cmfs.reflectance_xyz(rho, et, self.rule)?, wt);
+                let r = self.adapted_lab(self.cmfs.reflectance_xyz(rho, er, self.rule)?, wr);
+                Ok(PatchResult {
+                    patch: name.clone(),
+                    truth_lab: t,
+                    reconstructed_lab: r,
+                    de2000: delta_e_2000(t, r),
+                })
+            })
+            .collect()
+    }
+}
+
+/// The whole comparison from the per-normal results: means and maxima over the normals.
+fn summarise(
+    truth: &MapIrradiance,
+    reconstructed: &MapIrradiance,
+    opts: &RenditionOptions,
+    bench: &Bench,
+    table: &Table,
+    normals: Vec<NormalResult>,
+) -> Rendition {
     let worst = normals
         .iter()
         .max_by(|a, b| a.max_de2000.total_cmp(&b.max_de2000))
         .expect("at least one normal");
     let n = normals.len() as f64;
-    Ok(Rendition {
+    Rendition {
         truth: MapSummary::of(truth),
         reconstructed: MapSummary::of(reconstructed),
-        wavelengths: grid,
+        wavelengths: bench.grid,
         observer: opts.observer,
         rule: opts.rule,
         patches: table.name().to_string(),
@@ -428,7 +513,7 @@ pub fn compare(
         white_mean_de2000: normals.iter().map(|r| r.white_de2000).sum::<f64>() / n,
         white_max_de2000: normals.iter().map(|r| r.white_de2000).fold(0.0, f64::max),
         normals,
-    })
+    }
 }
 
 /// Reads both spectral OpenEXR maps and compares their colour rendition.
