@@ -5,7 +5,7 @@ use super::render::QuadratureArg;
 use super::tolerance::tolerance_options;
 use super::SpaceArg;
 use clap::Args;
-use specmap::colorimetry::{cct, srgb8, Cmfs, Lab, Observer, RgbSpace, Xyz, D65_XY};
+use specmap::colorimetry::{cct, srgb8, Cct, Cmfs, Lab, Observer, RgbSpace, Xyz, D65_XY};
 use specmap::data;
 use specmap::quadrature::choose::{self, Family, Selection};
 use specmap::quadrature::estimate::White;
@@ -56,7 +56,44 @@ pub(crate) struct ColorArgs {
     json: bool,
 }
 
+/// `specmap color`: the spectrum (and its light) read, the quadrature chosen, the colour
+/// measured, then reported as JSON or text.
 pub(crate) fn run(a: ColorArgs) -> anyhow::Result<()> {
+    let c = measure(&a)?;
+    let report = match a.json {
+        true => serde_json::to_string_pretty(&colour_json(&c))? + "\n",
+        false => colour_text(&c),
+    };
+    super::emit(&report);
+    Ok(())
+}
+
+/// The colour of the spectrum and how it was measured.
+struct Measured {
+    /// The spectrum's label.
+    spd: String,
+    /// The light's label, for a reflectance.
+    under: Option<String>,
+    observer: Observer,
+    quadrature: Quadrature,
+    grid_choice: Option<GridChoice>,
+    selection: Option<Selection>,
+    xyz: Xyz,
+    temperature: Cct,
+    linear_srgb: [f64; 3],
+    /// The RGB space of `--space` and the colour in it.
+    space: RgbSpace,
+    linear_rgb: [f64; 3],
+    srgb8: [u8; 3],
+    /// Whether linear sRGB leaves [0, 1] (8-bit clips it).
+    clipped: bool,
+    lab: Lab,
+    /// Why CIELAB is undefined, where the light's white has a zero.
+    lab_note: Option<String>,
+}
+
+/// The spectrum (under its light) read, its quadrature chosen, and its colour in every form.
+fn measure(a: &ColorArgs) -> anyhow::Result<Measured> {
     let observer = Observer::from(a.spectral.observer);
     let rule = Rule::from(a.spectral.rule);
     let space = RgbSpace::from(a.space);
@@ -74,76 +111,102 @@ pub(crate) fn run(a: ColorArgs) -> anyhow::Result<()> {
         .as_ref()
         .map_or(spd.label.clone(), |l| l.label.clone());
     let (quadrature, grid_choice, selection) =
-        quadrature_for(&a, &stimulus, &light_label, observer, rule)?;
-    let uniform = quadrature.uniform_grid();
+        quadrature_for(a, &stimulus, &light_label, observer, rule)?;
     let (xyz, white) = colour(&stimulus, &quadrature, under.is_some(), &light_label)?;
-    let under_label = under.map(|l| l.label);
-    let xy = xyz.xy();
-    let temperature = cct(xyz)?;
     let linear_srgb = RgbSpace::SRGB.rgb_from_xyz(xyz);
-    let linear_rgb = space.rgb_from_xyz(xyz);
-    let code = srgb8(linear_srgb);
-    let lab = Lab::from_xyz(xyz, white);
-    // CIELAB divides by the white: a light with no power under an observer's function (low-
-    // pressure sodium has none where the 1964 z-bar is non-zero) leaves that ratio 0/0.
+    Ok(Measured {
+        spd: spd.label,
+        under: under.map(|l| l.label),
+        observer,
+        quadrature,
+        grid_choice,
+        selection,
+        xyz,
+        temperature: cct(xyz)?,
+        linear_srgb,
+        space,
+        linear_rgb: space.rgb_from_xyz(xyz),
+        srgb8: srgb8(linear_srgb),
+        clipped: linear_srgb.iter().any(|&v| !(0.0..=1.0).contains(&v)),
+        lab: Lab::from_xyz(xyz, white),
+        lab_note: lab_note(white),
+    })
+}
+
+/// CIELAB divides by the white: a light with no power under an observer's function (low-
+/// pressure sodium has none where the 1964 z-bar is non-zero) leaves that ratio 0/0.
+fn lab_note(white: Xyz) -> Option<String> {
     let lab_undefined = ["X", "Y", "Z"]
         .iter()
         .zip(white.0)
         .filter(|(_, w)| w.is_nan() || *w <= 0.0)
         .map(|(n, _)| *n)
         .collect::<Vec<_>>();
-    let lab_note = (!lab_undefined.is_empty()).then(|| {
+    (!lab_undefined.is_empty()).then(|| {
         format!(
             "the light's white has {} = 0: it has no power where that colour-matching function \
              is non-zero, so CIELAB, which divides by it, is undefined there",
             lab_undefined.join(", ")
         )
-    });
-    let clipped = linear_srgb.iter().any(|&v| !(0.0..=1.0).contains(&v));
+    })
+}
 
-    if a.json {
-        let doc = serde_json::json!({
-            "spd": spd.label,
-            "under": under_label,
-            "observer": observer,
-            "range": uniform.map(|(g, _)| g.to_string()),
-            "rule": uniform.map(|(_, r)| r),
-            "wavelengths": quadrature.len(),
-            "quadrature": quadrature.summary(selection.as_ref().map(|s| s.estimate_de2000)),
-            "quadrature_choice": selection,
-            "XYZ": xyz.0,
-            "xy": xy,
-            "cct_K": temperature.kelvin,
-            "duv": temperature.duv,
-            "linear_srgb": linear_srgb,
-            "srgb8": code,
-            "srgb_clipped": clipped,
-            "space": space.name,
-            "linear_rgb": linear_rgb,
-            "lab": lab.0,
-            "lab_note": lab_note,
-            "grid_choice": grid_choice,
-            "lab_white": if under_label.is_some() { "the light (perfect reflector = L* 100)" } else { "D65, Y = 100" },
-        });
-        super::emit(&(serde_json::to_string_pretty(&doc)? + "\n"));
-        return Ok(());
-    }
-    let what = match &under_label {
-        Some(l) => format!("{} under {l}", spd.label),
-        None => format!("{} (as a light, Y = 100)", spd.label),
+/// `--json` of the colour.
+fn colour_json(c: &Measured) -> serde_json::Value {
+    let uniform = c.quadrature.uniform_grid();
+    serde_json::json!({
+        "spd": c.spd,
+        "under": c.under,
+        "observer": c.observer,
+        "range": uniform.map(|(g, _)| g.to_string()),
+        "rule": uniform.map(|(_, r)| r),
+        "wavelengths": c.quadrature.len(),
+        "quadrature": c.quadrature.summary(c.selection.as_ref().map(|s| s.estimate_de2000)),
+        "quadrature_choice": c.selection,
+        "XYZ": c.xyz.0,
+        "xy": c.xyz.xy(),
+        "cct_K": c.temperature.kelvin,
+        "duv": c.temperature.duv,
+        "linear_srgb": c.linear_srgb,
+        "srgb8": c.srgb8,
+        "srgb_clipped": c.clipped,
+        "space": c.space.name,
+        "linear_rgb": c.linear_rgb,
+        "lab": c.lab.0,
+        "lab_note": c.lab_note,
+        "grid_choice": c.grid_choice,
+        "lab_white": if c.under.is_some() { "the light (perfect reflector = L* 100)" } else { "D65, Y = 100" },
+    })
+}
+
+/// The colour's report without `--json`: how it was measured, then XYZ, CCT, RGB and CIELAB.
+fn colour_text(c: &Measured) -> String {
+    let what = match &c.under {
+        Some(l) => format!("{} under {l}", c.spd),
+        None => format!("{} (as a light, Y = 100)", c.spd),
     };
+    let observer = c.observer;
     let mut out = String::new();
-    match uniform {
+    match c.quadrature.uniform_grid() {
         Some((grid, rule)) => outln!(out, "{what}\n  {observer}, {grid} nm, {rule} rule"),
-        None => outln!(out, "{what}\n  {observer}, {quadrature}"),
+        None => outln!(out, "{what}\n  {observer}, {}", c.quadrature),
     }
-    if let Some(c) = &grid_choice {
-        super::write_grid_choice(&mut out, c);
+    if let Some(g) = &c.grid_choice {
+        super::write_grid_choice(&mut out, g);
     }
-    if let Some(s) = &selection {
+    if let Some(s) = &c.selection {
         super::tolerance::write_selection(&mut out, s);
     }
-    super::write_xyz(&mut out, xyz);
+    super::write_xyz(&mut out, c.xyz);
+    write_cct(&mut out, &c.temperature);
+    write_rgb(&mut out, c);
+    super::write_srgb8(&mut out, c.srgb8);
+    write_lab(&mut out, &c.lab, c.lab_note.as_deref());
+    out
+}
+
+/// The CCT line: the temperature and Duv, or how far from the Planckian locus it is.
+fn write_cct(out: &mut String, temperature: &Cct) {
     match temperature.kelvin {
         Some(k) => outln!(
             out,
@@ -156,29 +219,37 @@ pub(crate) fn run(a: ColorArgs) -> anyhow::Result<()> {
             temperature.duv.abs()
         ),
     }
+}
+
+/// The linear sRGB line, and the line of `--space` when it is another space.
+fn write_rgb(out: &mut String, c: &Measured) {
+    let s = c.linear_srgb;
     outln!(
         out,
         "  linear sRGB  {:>10.5} {:>10.5} {:>10.5}{}",
-        linear_srgb[0],
-        linear_srgb[1],
-        linear_srgb[2],
-        if clipped {
+        s[0],
+        s[1],
+        s[2],
+        if c.clipped {
             "   (outside [0,1]: clipped for 8-bit)"
         } else {
             ""
         }
     );
-    if space != RgbSpace::SRGB {
+    if c.space != RgbSpace::SRGB {
         outln!(
             out,
             "  linear {:<6}{:>10.5} {:>10.5} {:>10.5}",
-            space.name,
-            linear_rgb[0],
-            linear_rgb[1],
-            linear_rgb[2]
+            c.space.name,
+            c.linear_rgb[0],
+            c.linear_rgb[1],
+            c.linear_rgb[2]
         );
     }
-    super::write_srgb8(&mut out, code);
+}
+
+/// The CIELAB line (undefined components said so), and why they are undefined.
+fn write_lab(out: &mut String, lab: &Lab, note: Option<&str>) {
     let lab_text = lab.0.map(|v| {
         if v.is_finite() {
             format!("{v:>10.4}")
@@ -193,11 +264,9 @@ pub(crate) fn run(a: ColorArgs) -> anyhow::Result<()> {
         lab_text[1],
         lab_text[2]
     );
-    if let Some(note) = &lab_note {
+    if let Some(note) = note {
         outln!(out, "               {note}");
     }
-    super::emit(&out);
-    Ok(())
 }
 
 /// The quadrature of `--quadrature`, `--tolerance`, `--range` and `--rule`, and what

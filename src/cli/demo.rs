@@ -18,7 +18,7 @@ use specmap::envmap::{files, layout};
 use specmap::fit::{self, FitInput, Mode};
 use specmap::render::gpu::{AdapterReport, Gpu};
 use specmap::render::prepare::Prepared;
-use specmap::render::{cpu, env, Backend, Preset, Spectral};
+use specmap::render::{cpu, env, Backend, Lighting, Preset, Spectral};
 use specmap::spectrum::{Rule, WavelengthGrid};
 use specmap::tradeoff::{self, Measurement, Reference};
 use std::path::{Path, PathBuf};
@@ -183,12 +183,96 @@ pub(super) struct Run {
     pub(crate) demo_command: String,
 }
 
+/// The demo: where it reads and writes, checked; the renderer; fit, convert, render, trade-off;
+/// the page; the summary on stdout.
 pub(crate) fn run(a: DemoArgs) -> anyhow::Result<()> {
     let t_all = Instant::now();
-    let env_path = resolve_env(a.env.as_deref())?;
-    let env_str = env_path
+    let paths = paths(&a)?;
+    let sizes = Sizes::new(a.quick);
+    check_outputs(&paths)?;
+    check_map(&paths.env)?;
+    let (gpu, renderer) = open_renderer(a.backend)?;
+    let adapter = gpu.as_ref().map(|g| g.adapter());
+    std::fs::create_dir_all(&paths.dir)
+        .with_context(|| format!("creating the output folder {}", paths.dir.display()))?;
+    let mut seconds = Vec::new();
+    let fitted = timed(&mut seconds, "fit", || fit_basis(&paths))?;
+    let maps = timed(&mut seconds, "convert", || convert_maps(&paths, &sizes))?;
+    let stage = RenderStage {
+        paths: &paths,
+        sizes: &sizes,
+        gpu: gpu.as_ref(),
+        backend: a.backend,
+        renderer: &renderer,
+    };
+    let (renders, render_spectral) = timed(&mut seconds, "render", || render_presets(&stage))?;
+    let tradeoff = timed(&mut seconds, "trade-off", || measure_tradeoff(&sizes))?;
+    let index = paths.out("index.html");
+    eprintln!("demo [5/5] page: {}", index.display());
+    let demo_command = demo_command(&a);
+    seconds.push(("total", t_all.elapsed().as_secs_f64()));
+    let run = Run {
+        quick: a.quick,
+        env: paths.env_str,
+        dir: paths.dir,
+        fits: fitted.fits,
+        basis_plot: fitted.basis_plot,
+        fit_commands: fitted.commands,
+        converted: maps.converted,
+        paper: maps.paper,
+        inspected: maps.inspected,
+        renderer,
+        adapter,
+        renders,
+        render_spectral,
+        tradeoff,
+        seconds,
+        demo_command,
+    };
+    specmap::io::write_atomic(&index, page::html(&run).as_bytes())?;
+    let total = t_all.elapsed().as_secs_f64();
+    let files = files_written(&run);
+    let summary = if a.json {
+        serde_json::to_string_pretty(&json_summary(&run, &index, &files))? + "\n"
+    } else {
+        text_summary(&run, &index, files.len(), total)
+    };
+    super::emit(&summary);
+    Ok(())
+}
+
+/// Where the demo reads its map and writes its files.
+struct Paths {
+    /// The RGB map, resolved.
+    env: PathBuf,
+    /// The same, as text (the page and the commands print it).
+    env_str: String,
+    /// The output folder.
+    dir: PathBuf,
+    /// The converted map's file name.
+    spectral_name: String,
+    /// The paper-mode copy's file name.
+    paper_name: String,
+}
+
+impl Paths {
+    /// A file of the output folder.
+    fn out(&self, name: &str) -> PathBuf {
+        self.dir.join(name)
+    }
+
+    /// A file of the output folder as a shell word.
+    fn shown(&self, name: &str) -> String {
+        sh(&self.out(name).display().to_string())
+    }
+}
+
+/// The map (`--env` or the bundled one, UTF-8) and the output folder (a folder if it exists).
+fn paths(a: &DemoArgs) -> anyhow::Result<Paths> {
+    let env = resolve_env(a.env.as_deref())?;
+    let env_str = env
         .to_str()
-        .with_context(|| format!("{}: the path is not UTF-8", env_path.display()))?
+        .with_context(|| format!("{}: the path is not UTF-8", env.display()))?
         .to_string();
     let dir = a.output.clone();
     if dir.exists() && !dir.is_dir() {
@@ -198,30 +282,39 @@ pub(crate) fn run(a: DemoArgs) -> anyhow::Result<()> {
             dir.display()
         );
     }
-    let sizes = Sizes::new(a.quick);
-    let out = |name: &str| dir.join(name);
-    let stem = file_stem(&env_path);
-    let spectral_name = format!("{stem}.spectral.exr");
-    let paper_name = format!("{stem}-paper.spectral.exr");
-    // Every file the demo writes, checked against the map before any work.
+    let stem = file_stem(&env);
+    Ok(Paths {
+        env,
+        env_str,
+        dir,
+        spectral_name: format!("{stem}.spectral.exr"),
+        paper_name: format!("{stem}-paper.spectral.exr"),
+    })
+}
+
+/// Every file the demo writes, checked against the map before any work.
+fn check_outputs(paths: &Paths) -> anyhow::Result<()> {
     let mut guard = super::guard::Guard::new();
-    guard.input("--env", &env_path);
+    guard.input("--env", &paths.env);
     let mut names = vec![
         "basis.png".to_string(),
-        spectral_name.clone(),
+        paths.spectral_name.clone(),
         "roundtrip.png".into(),
-        paper_name.clone(),
+        paths.paper_name.clone(),
         "roundtrip-paper.png".into(),
     ];
     names.extend(Preset::ALL.map(|p| format!("{}.png", p.name())));
     names.push("index.html".into());
     for name in &names {
-        guard.output("-o", out(name));
+        guard.output("-o", paths.out(name));
     }
-    guard.folder("-o", &dir).check()?;
-    // The map is read once up front (a 1024x512 map in ~0.05 s): a file that is not an image,
-    // or not an environment layout, fails before anything is written.
-    let probe = files::read_rgb(&env_path, None)?;
+    guard.folder("-o", &paths.dir).check()
+}
+
+/// The map read once up front (a 1024x512 map in ~0.05 s): a file that is not an image, or not
+/// an environment layout, fails before anything is written.
+fn check_map(env: &Path) -> anyhow::Result<()> {
+    let probe = files::read_rgb(env, None)?;
     layout::detect(
         probe.image.width,
         probe.image.height,
@@ -230,13 +323,13 @@ pub(crate) fn run(a: DemoArgs) -> anyhow::Result<()> {
             files::EnvmapAttr::Cube => layout::Layout::Cube,
         }),
     )
-    .with_context(|| format!("--env {}", env_path.display()))?;
-    drop(probe);
-    let shown = |name: &str| sh(&out(name).display().to_string());
-    let mut seconds = Vec::new();
+    .with_context(|| format!("--env {}", env.display()))?;
+    Ok(())
+}
 
-    // The renderer first: --backend gpu without an adapter fails before any work.
-    let (gpu, renderer) = match a.backend {
+/// The renderer and its name, first: `--backend gpu` without an adapter fails before any work.
+fn open_renderer(backend: BackendArg) -> anyhow::Result<(Option<Gpu>, String)> {
+    Ok(match backend {
         BackendArg::Cpu => (None, "CPU (--backend cpu)".to_string()),
         BackendArg::Gpu => {
             let g = Gpu::new().context("--backend gpu")?;
@@ -257,14 +350,34 @@ pub(crate) fn run(a: DemoArgs) -> anyhow::Result<()> {
                 (None, "CPU (no GPU adapter found)".to_string())
             }
         },
-    };
-    let adapter = gpu.as_ref().map(|g| g.adapter());
-    std::fs::create_dir_all(&dir)
-        .with_context(|| format!("creating the output folder {}", dir.display()))?;
+    })
+}
 
-    // 1. The paper's basis for D65 in the three modes.
-    eprintln!("demo [1/5] fit: the paper's basis under D65, modes paper, exact and nonneg");
+/// Runs one stage and adds its seconds under `name`.
+fn timed<T>(
+    seconds: &mut Vec<(&'static str, f64)>,
+    name: &'static str,
+    stage: impl FnOnce() -> anyhow::Result<T>,
+) -> anyhow::Result<T> {
     let t = Instant::now();
+    let value = stage()?;
+    seconds.push((name, t.elapsed().as_secs_f64()));
+    Ok(value)
+}
+
+/// The fit stage's results.
+struct Fitted {
+    /// Paper, exact and nonneg, in that order.
+    fits: Vec<FitRow>,
+    /// The basis plot's file name.
+    basis_plot: String,
+    /// The commands behind the table and the plot.
+    commands: [String; 2],
+}
+
+/// 1. The paper's basis for D65 in the three modes, and its plot.
+fn fit_basis(paths: &Paths) -> anyhow::Result<Fitted> {
+    eprintln!("demo [1/5] fit: the paper's basis under D65, modes paper, exact and nonneg");
     let grid = WavelengthGrid::new(380.0, 780.0, 1.0)?;
     let input = FitInput::from_names(
         "D65",
@@ -282,152 +395,185 @@ pub(crate) fn run(a: DemoArgs) -> anyhow::Result<()> {
         fits.push(FitRow { fit: f, round_trip });
     }
     let basis_plot = "basis.png".to_string();
-    write_basis_plot(&fits[0].fit, &out(&basis_plot)).context("writing the basis plot")?;
-    let fit_commands = [
+    write_basis_plot(&fits[0].fit, &paths.out(&basis_plot)).context("writing the basis plot")?;
+    let commands = [
         "specmap fit --light D65 --mode paper,exact,nonneg".to_string(),
-        format!("specmap fit --light D65 --plot {}", shown(&basis_plot)),
+        format!(
+            "specmap fit --light D65 --plot {}",
+            paths.shown(&basis_plot)
+        ),
     ];
-    seconds.push(("fit", t.elapsed().as_secs_f64()));
+    Ok(Fitted {
+        fits,
+        basis_plot,
+        commands,
+    })
+}
 
-    // 2. The map, converted as `specmap convert --light auto` does, and a small paper-mode copy.
+/// The convert stage's results.
+struct Maps {
+    /// The map converted as `specmap convert --light auto` does.
+    converted: Converted,
+    /// The small paper-mode copy.
+    paper: Converted,
+    /// The lights of the map, drawn over it.
+    inspected: Inspected,
+}
+
+/// 2. The map, converted as `specmap convert --light auto` does, and a small paper-mode copy.
+fn convert_maps(paths: &Paths, sizes: &Sizes) -> anyhow::Result<Maps> {
     eprintln!(
         "demo [2/5] convert: {} -> {} (every light of the scene), and a paper-mode copy",
-        env_path.display(),
-        out(&spectral_name).display()
+        paths.env.display(),
+        paths.out(&paths.spectral_name).display()
     );
-    let t = Instant::now();
     let size = |n: Option<usize>| -> Vec<String> {
         n.map_or(Vec::new(), |n| vec!["--size".into(), n.to_string()])
     };
     let converted = convert_map(
-        &env_str,
-        &dir,
-        &spectral_name,
+        &paths.env_str,
+        &paths.dir,
+        &paths.spectral_name,
         "roundtrip.png",
         &size(sizes.map),
     )?;
     let mut paper_flags = vec!["--mode".to_string(), "paper".to_string()];
     paper_flags.extend(size(Some(sizes.paper_map)));
     let paper = convert_map(
-        &env_str,
-        &dir,
-        &paper_name,
+        &paths.env_str,
+        &paths.dir,
+        &paths.paper_name,
         "roundtrip-paper.png",
         &paper_flags,
     )?;
-    let inspected = inspect_map(&env_str, &dir, "lights.png")?;
-    seconds.push(("convert", t.elapsed().as_secs_f64()));
+    let inspected = inspect_map(&paths.env_str, &paths.dir, "lights.png")?;
+    Ok(Maps {
+        converted,
+        paper,
+        inspected,
+    })
+}
 
-    // 3. The presets under the converted map (the chart has its own three lights).
-    let t = Instant::now();
-    eprintln!(
-        "demo [3/5] render: {} on {renderer}",
-        Preset::ALL.map(|p| p.name()).join(", ")
-    );
-    let map = out(&spectral_name);
-    let (lighting, _) = env::load(&map, "D65")
-        .with_context(|| format!("loading the environment {}", map.display()))?;
-    let spectral = Spectral::default();
-    let backend_flag = match a.backend {
+/// What the render stage works with.
+struct RenderStage<'a> {
+    paths: &'a Paths,
+    sizes: &'a Sizes,
+    /// The GPU, when one renders.
+    gpu: Option<&'a Gpu>,
+    /// `--backend` as given.
+    backend: BackendArg,
+    /// The renderer in words.
+    renderer: &'a str,
+}
+
+/// The `--backend` flag as the commands print it (none for auto).
+fn backend_flag(backend: BackendArg) -> &'static str {
+    match backend {
         BackendArg::Auto => "",
         BackendArg::Gpu => " --backend gpu",
         BackendArg::Cpu => " --backend cpu",
-    };
+    }
+}
+
+/// 3. The presets under the converted map (the chart has its own three lights).
+fn render_presets(stage: &RenderStage) -> anyhow::Result<(Vec<Render>, Spectral)> {
+    eprintln!(
+        "demo [3/5] render: {} on {}",
+        Preset::ALL.map(|p| p.name()).join(", "),
+        stage.renderer
+    );
+    let map = stage.paths.out(&stage.paths.spectral_name);
+    let (lighting, _) = env::load(&map, "D65")
+        .with_context(|| format!("loading the environment {}", map.display()))?;
+    let spectral = Spectral::default();
     let mut renders = Vec::new();
     for preset in Preset::ALL {
-        let (w, h) = sizes.image(preset);
-        let chart = preset == Preset::Chart;
-        let scene = preset.scene(w, h, "D65", (!chart).then(|| lighting.clone()))?;
-        let t = Instant::now();
-        let prepared = Prepared::new(&scene, &spectral)
-            .with_context(|| format!("preparing the {} scene", preset.name()))?;
-        let (image, backend) = match &gpu {
-            Some(g) => match g.render(&prepared) {
-                Ok((image, _)) => (image, Backend::Gpu),
-                Err(e) if a.backend == BackendArg::Auto => {
-                    eprintln!(
-                        "note: the GPU could not render {}, using the CPU: {e}",
-                        preset.name()
-                    );
-                    (cpu::render(&prepared), Backend::Cpu)
-                }
-                Err(e) => {
-                    return Err(e).with_context(|| format!("rendering {}", preset.name()));
-                }
-            },
-            None => (cpu::render(&prepared), Backend::Cpu),
-        };
-        let file = format!("{}.png", preset.name());
-        image
-            .write_png(&out(&file), 0.0)
-            .with_context(|| format!("writing {}", out(&file).display()))?;
-        let env_flag = if chart {
-            String::new()
-        } else {
-            format!(" --env {}", sh(&map.display().to_string()))
-        };
-        renders.push(Render {
-            preset,
-            size: (w, h),
-            command: format!(
-                "specmap render --scene {}{env_flag} --size {w}x{h}{backend_flag} -o {}",
-                preset.name(),
-                shown(&file)
-            ),
-            file,
-            backend,
-            seconds: t.elapsed().as_secs_f64(),
-        });
+        renders.push(render_preset(stage, preset, &map, &lighting, &spectral)?);
     }
-    seconds.push(("render", t.elapsed().as_secs_f64()));
+    Ok((renders, spectral))
+}
 
-    // 4. Speed for accuracy: the ColorChecker under six lights on coarser and coarser grids.
+/// One preset rendered, written as PNG, with the command that draws it again.
+fn render_preset(
+    stage: &RenderStage,
+    preset: Preset,
+    map: &Path,
+    lighting: &Lighting,
+    spectral: &Spectral,
+) -> anyhow::Result<Render> {
+    let (w, h) = stage.sizes.image(preset);
+    let chart = preset == Preset::Chart;
+    let scene = preset.scene(w, h, "D65", (!chart).then(|| lighting.clone()))?;
+    let t = Instant::now();
+    let prepared = Prepared::new(&scene, spectral)
+        .with_context(|| format!("preparing the {} scene", preset.name()))?;
+    let (image, backend) = match stage.gpu {
+        Some(g) => match g.render(&prepared) {
+            Ok((image, _)) => (image, Backend::Gpu),
+            Err(e) if stage.backend == BackendArg::Auto => {
+                eprintln!(
+                    "note: the GPU could not render {}, using the CPU: {e}",
+                    preset.name()
+                );
+                (cpu::render(&prepared), Backend::Cpu)
+            }
+            Err(e) => {
+                return Err(e).with_context(|| format!("rendering {}", preset.name()));
+            }
+        },
+        None => (cpu::render(&prepared), Backend::Cpu),
+    };
+    let file = format!("{}.png", preset.name());
+    let path = stage.paths.out(&file);
+    image
+        .write_png(&path, 0.0)
+        .with_context(|| format!("writing {}", path.display()))?;
+    let env_flag = if chart {
+        String::new()
+    } else {
+        format!(" --env {}", sh(&map.display().to_string()))
+    };
+    Ok(Render {
+        preset,
+        size: (w, h),
+        command: format!(
+            "specmap render --scene {}{env_flag} --size {w}x{h}{} -o {}",
+            preset.name(),
+            backend_flag(stage.backend),
+            stage.paths.shown(&file)
+        ),
+        file,
+        backend,
+        seconds: t.elapsed().as_secs_f64(),
+    })
+}
+
+/// 4. Speed for accuracy: the ColorChecker under six lights on coarser and coarser grids.
+fn measure_tradeoff(sizes: &Sizes) -> anyhow::Result<Vec<TradeoffRow>> {
     let rows = sizes.steps.len() + 1;
     eprintln!(
         "demo [4/5] trade-off: the ColorChecker under {} lights, {rows} grids each, against 1 nm \
          Simpson",
         TRADEOFF_LIGHTS.len()
     );
-    let t = Instant::now();
-    let tradeoff = tradeoff_table(&sizes)?;
-    seconds.push(("trade-off", t.elapsed().as_secs_f64()));
+    tradeoff_table(sizes)
+}
 
-    // 5. The page.
-    let index = out("index.html");
-    eprintln!("demo [5/5] page: {}", index.display());
-    let mut demo_command = format!("specmap demo -o {}", sh(&dir.display().to_string()));
+/// The command that runs this demo again.
+fn demo_command(a: &DemoArgs) -> String {
+    let mut command = format!("specmap demo -o {}", sh(&a.output.display().to_string()));
     if let Some(e) = &a.env {
-        demo_command += &format!(" --env {}", sh(&e.display().to_string()));
+        command += &format!(" --env {}", sh(&e.display().to_string()));
     }
-    if a.backend != BackendArg::Auto {
-        demo_command += backend_flag;
-    }
+    command += backend_flag(a.backend);
     if a.quick {
-        demo_command += " --quick";
+        command += " --quick";
     }
-    seconds.push(("total", t_all.elapsed().as_secs_f64()));
-    let run = Run {
-        quick: a.quick,
-        env: env_str,
-        dir: dir.clone(),
-        fits,
-        basis_plot,
-        fit_commands,
-        converted,
-        paper,
-        inspected,
-        renderer,
-        adapter,
-        renders,
-        render_spectral: spectral,
-        tradeoff,
-        seconds,
-        demo_command,
-    };
-    let html = page::html(&run);
-    specmap::io::write_atomic(&index, html.as_bytes())?;
-    let total = t_all.elapsed().as_secs_f64();
+    command
+}
 
+/// The files of the output folder, in the order the page shows them.
+fn files_written(run: &Run) -> Vec<String> {
     let mut files: Vec<String> = vec![run.basis_plot.clone()];
     for c in [&run.converted, &run.paper] {
         files.push(c.file.clone());
@@ -436,72 +582,80 @@ pub(crate) fn run(a: DemoArgs) -> anyhow::Result<()> {
     files.push(run.inspected.overlay.clone());
     files.extend(run.renders.iter().map(|r| r.file.clone()));
     files.push("index.html".into());
-    if a.json {
-        let doc = serde_json::json!({
-            "index": index.display().to_string(),
-            "dir": dir.display().to_string(),
-            "files": files,
-            "env": run.env,
-            "quick": run.quick,
-            "renderer": run.renderer,
-            "adapter": run.adapter,
-            "seconds": run.seconds.iter().map(|(k, v)| (k.to_string(), serde_json::Value::from(*v)))
-                .collect::<serde_json::Map<_, _>>(),
-            "fit": run.fits.iter().map(|r| serde_json::json!({
-                "mode": mode_name(r.fit.mode),
-                "weights": r.fit.weights,
-                "roundtrip": r.round_trip,
-            })).collect::<Vec<_>>(),
-            "convert": run.converted.report,
-            "convert_command": run.converted.command,
-            "roundtrip_command": run.converted.roundtrip_command,
-            "lights": run.inspected.lights,
-            "roundtrip": run.converted.round_trip,
-            "roundtrip_paper": run.paper.round_trip,
-            "renders": run.renders.iter().map(|r| serde_json::json!({
-                "scene": r.preset.name(),
-                "file": r.file,
-                "size": [r.size.0, r.size.1],
-                "backend": r.backend,
-                "seconds": r.seconds,
-            })).collect::<Vec<_>>(),
-            "tradeoff": run.tradeoff.iter().map(|r| serde_json::json!({
-                "light": r.light,
-                "step_nm": r.step_nm,
-                "samples": r.samples,
-                "rule": r.rule.to_string(),
-                "misses_the_line": r.measurement.is_none(),
-                "mean_dE2000": r.measurement.as_ref().map(|m| m.mean_de2000),
-                "max_dE2000": r.measurement.as_ref().map(|m| m.max_de2000),
-                "worst": r.measurement.as_ref().map(|m| m.worst.clone()),
-                "micros_per_colour": r.measurement.as_ref().map(|m| m.micros_per_colour),
-            })).collect::<Vec<_>>(),
-        });
-        super::emit(&(serde_json::to_string_pretty(&doc)? + "\n"));
-        return Ok(());
-    }
+    files
+}
+
+/// `--json`: what was written and measured.
+fn json_summary(run: &Run, index: &Path, files: &[String]) -> serde_json::Value {
+    serde_json::json!({
+        "index": index.display().to_string(),
+        "dir": run.dir.display().to_string(),
+        "files": files,
+        "env": run.env,
+        "quick": run.quick,
+        "renderer": run.renderer,
+        "adapter": run.adapter,
+        "seconds": run.seconds.iter().map(|(k, v)| (k.to_string(), serde_json::Value::from(*v)))
+            .collect::<serde_json::Map<_, _>>(),
+        "fit": run.fits.iter().map(|r| serde_json::json!({
+            "mode": mode_name(r.fit.mode),
+            "weights": r.fit.weights,
+            "roundtrip": r.round_trip,
+        })).collect::<Vec<_>>(),
+        "convert": run.converted.report,
+        "convert_command": run.converted.command,
+        "roundtrip_command": run.converted.roundtrip_command,
+        "lights": run.inspected.lights,
+        "roundtrip": run.converted.round_trip,
+        "roundtrip_paper": run.paper.round_trip,
+        "renders": run.renders.iter().map(|r| serde_json::json!({
+            "scene": r.preset.name(),
+            "file": r.file,
+            "size": [r.size.0, r.size.1],
+            "backend": r.backend,
+            "seconds": r.seconds,
+        })).collect::<Vec<_>>(),
+        "tradeoff": run.tradeoff.iter().map(tradeoff_json).collect::<Vec<_>>(),
+    })
+}
+
+/// One trade-off row of `--json`.
+fn tradeoff_json(r: &TradeoffRow) -> serde_json::Value {
+    serde_json::json!({
+        "light": r.light,
+        "step_nm": r.step_nm,
+        "samples": r.samples,
+        "rule": r.rule.to_string(),
+        "misses_the_line": r.measurement.is_none(),
+        "mean_dE2000": r.measurement.as_ref().map(|m| m.mean_de2000),
+        "max_dE2000": r.measurement.as_ref().map(|m| m.max_de2000),
+        "worst": r.measurement.as_ref().map(|m| m.worst.clone()),
+        "micros_per_colour": r.measurement.as_ref().map(|m| m.micros_per_colour),
+    })
+}
+
+/// The summary without `--json`: the page, what was done, how many files in how long.
+fn text_summary(run: &Run, index: &Path, files: usize, total: f64) -> String {
     let c = &run.converted.report;
-    super::emit(&format!(
-        "wrote {}\ndemo: fitted D65 in 3 modes, converted {} (lights: {}), rendered {} presets \
-         on {}, measured {} grids; {} files in {:.1} s. Open the page in a browser.\n",
+    let lights = if c.lights.is_empty() {
+        "none found".to_string()
+    } else {
+        c.lights
+            .iter()
+            .map(|l| format!("{} {}", format!("{:?}", l.kind).to_lowercase(), l.spd))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    format!(
+        "wrote {}\ndemo: fitted D65 in 3 modes, converted {} (lights: {lights}), rendered {} \
+         presets on {}, measured {} grids; {files} files in {total:.1} s. Open the page in a \
+         browser.\n",
         index.display(),
         run.env,
-        if c.lights.is_empty() {
-            "none found".to_string()
-        } else {
-            c.lights
-                .iter()
-                .map(|l| format!("{} {}", format!("{:?}", l.kind).to_lowercase(), l.spd))
-                .collect::<Vec<_>>()
-                .join(", ")
-        },
         run.renders.len(),
         run.renderer,
         run.tradeoff.len(),
-        files.len(),
-        total
-    ));
-    Ok(())
+    )
 }
 
 /// The map to convert: `--env`, else envmaps/sunrise.exr here, else the one of the source tree
@@ -620,7 +774,7 @@ fn inspect_map(input: &str, dir: &Path, name: &str) -> anyhow::Result<Inspected>
     let opts = ConvertOptions::faithful();
     let inspection =
         convert::inspect(input, &opts).with_context(|| format!("inspecting {input}"))?;
-    write_overlay(&path, &inspection.map, &inspection.scene)?;
+    write_overlay(&path, inspection.map(), &inspection.scene)?;
     Ok(Inspected {
         lights: inspection.lights,
         overlay: name.to_string(),

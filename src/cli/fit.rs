@@ -51,7 +51,32 @@ pub(crate) struct FitArgs {
     json: bool,
 }
 
+/// `specmap fit`: the options and files checked, every light fitted in every mode; a table for
+/// several, else the files, the one fit's report and `--rgb`'s pixel.
 pub(crate) fn run(a: FitArgs) -> anyhow::Result<()> {
+    check_args(&a)?;
+    check_files(&a)?;
+    let space = RgbSpace::from(a.space);
+    let mut fits = fit_all(&a, space)?;
+    if fits.len() > 1 {
+        if a.output.is_some() || a.plot.is_some() || a.rgb.is_some() {
+            anyhow::bail!("-o, --plot and --rgb take one light and one mode");
+        }
+        return table(&fits, a.json);
+    }
+    let (f, rt) = fits.pop().expect("one light and one mode");
+    let pixel = a.rgb.as_deref().map(|v| pixel(&f, &space, v)).transpose()?;
+    write_files(&a, &f)?;
+    let report = match a.json {
+        true => serde_json::to_string_pretty(&fit_json(&f, &rt, pixel))? + "\n",
+        false => fit_text(&f, &rt, pixel.as_ref()),
+    };
+    super::emit(&report);
+    Ok(())
+}
+
+/// Three basis spectra, and three values for `--rgb`.
+fn check_args(a: &FitArgs) -> anyhow::Result<()> {
     if a.basis.len() != 3 {
         anyhow::bail!(
             "--basis takes three spectra (for R, G and B), comma-separated; got {}: {}",
@@ -62,6 +87,11 @@ pub(crate) fn run(a: FitArgs) -> anyhow::Result<()> {
     if a.rgb.as_ref().is_some_and(|v| v.len() != 3) {
         anyhow::bail!("--rgb takes three comma-separated values, e.g. --rgb 1,0.5,0.2");
     }
+    Ok(())
+}
+
+/// The spectra read and the files written, checked before any work.
+fn check_files(a: &FitArgs) -> anyhow::Result<()> {
     let mut guard = super::guard::Guard::new();
     for light in &a.light {
         guard.spec("--light", light);
@@ -75,8 +105,11 @@ pub(crate) fn run(a: FitArgs) -> anyhow::Result<()> {
     if let Some(p) = &a.plot {
         guard.output("--plot", p);
     }
-    guard.check()?;
-    let space = RgbSpace::from(a.space);
+    guard.check()
+}
+
+/// Every light in every mode, each fit with its round trip over the 17^3 RGB grid.
+fn fit_all(a: &FitArgs, space: RgbSpace) -> anyhow::Result<Vec<(fit::Fit, fit::RoundTrip)>> {
     let modes: Vec<Mode> = a.mode.iter().map(|&m| Mode::from(m)).collect();
     let mut fits = Vec::new();
     for name in &a.light {
@@ -95,69 +128,73 @@ pub(crate) fn run(a: FitArgs) -> anyhow::Result<()> {
             fits.push((f, rt));
         }
     }
-    if fits.len() > 1 {
-        if a.output.is_some() || a.plot.is_some() || a.rgb.is_some() {
-            anyhow::bail!("-o, --plot and --rgb take one light and one mode");
-        }
-        return table(&fits, a.json);
-    }
-    let (f, rt) = fits.pop().expect("one light and one mode");
-    let pixel = match &a.rgb {
-        Some(v) => {
-            let rgb = [v[0], v[1], v[2]];
-            if rgb.iter().any(|x| !x.is_finite() || *x < 0.0 || *x > 1e30) {
-                anyhow::bail!(
-                    "--rgb {rgb:?}: linear RGB values must be between 0 and 1e30 (HDR is fine; \
-                     beyond that the coefficients overflow)"
-                );
-            }
-            let up = fit::Upsampler::new(&f, &space);
-            let coefficients = up.coefficients(rgb);
-            let spd = up.spd(rgb);
-            Some(serde_json::json!({
-                "rgb": rgb,
-                "coefficients": coefficients,
-                "rendered_rgb": up.rendered_rgb(coefficients),
-                "dE2000": up.round_trip_error(rgb, coefficients),
-                "min_spd": spd.iter().cloned().fold(f64::INFINITY, f64::min),
-                "spd": spd,
-            }))
-        }
-        None => None,
-    };
+    Ok(fits)
+}
 
+/// `--rgb`: the pixel's basis coefficients, SPD and round-trip error.
+fn pixel(f: &fit::Fit, space: &RgbSpace, v: &[f64]) -> anyhow::Result<serde_json::Value> {
+    let rgb = [v[0], v[1], v[2]];
+    if rgb.iter().any(|x| !x.is_finite() || *x < 0.0 || *x > 1e30) {
+        anyhow::bail!(
+            "--rgb {rgb:?}: linear RGB values must be between 0 and 1e30 (HDR is fine; beyond \
+             that the coefficients overflow)"
+        );
+    }
+    let up = fit::Upsampler::new(f, space);
+    let coefficients = up.coefficients(rgb);
+    let spd = up.spd(rgb);
+    Ok(serde_json::json!({
+        "rgb": rgb,
+        "coefficients": coefficients,
+        "rendered_rgb": up.rendered_rgb(coefficients),
+        "dE2000": up.round_trip_error(rgb, coefficients),
+        "min_spd": spd.iter().cloned().fold(f64::INFINITY, f64::min),
+        "spd": spd,
+    }))
+}
+
+/// `-o` (the fit as JSON) and `--plot`.
+fn write_files(a: &FitArgs, f: &fit::Fit) -> anyhow::Result<()> {
     if let Some(path) = &a.output {
-        let text = serde_json::to_string_pretty(&f)?;
+        let text = serde_json::to_string_pretty(f)?;
         specmap::io::write_atomic(path, text.as_bytes())?;
         eprintln!("wrote {}", path.display());
     }
     if let Some(path) = &a.plot {
-        write_basis_plot(&f, path)?;
+        write_basis_plot(f, path)?;
         eprintln!("wrote {}", path.display());
     }
+    Ok(())
+}
 
-    if a.json {
-        let doc = serde_json::json!({
-            "light": f.light,
-            "mode": f.mode,
-            "basis": f.basis,
-            "space": f.space,
-            "observer": f.observer,
-            "range": f.grid.to_string(),
-            "rule": f.rule,
-            "weights": f.weights,
-            "matrix": f.matrix,
-            "condition_number": f.condition_number,
-            "regularized": f.regularized,
-            "lost_information": f.lost_information,
-            "light_rgb": f.light_rgb,
-            "argmin": f.argmin,
-            "roundtrip": rt,
-            "pixel": pixel,
-        });
-        super::emit(&(serde_json::to_string_pretty(&doc)? + "\n"));
-        return Ok(());
-    }
+/// `--json` of one fit.
+fn fit_json(
+    f: &fit::Fit,
+    rt: &fit::RoundTrip,
+    pixel: Option<serde_json::Value>,
+) -> serde_json::Value {
+    serde_json::json!({
+        "light": f.light,
+        "mode": f.mode,
+        "basis": f.basis,
+        "space": f.space,
+        "observer": f.observer,
+        "range": f.grid.to_string(),
+        "rule": f.rule,
+        "weights": f.weights,
+        "matrix": f.matrix,
+        "condition_number": f.condition_number,
+        "regularized": f.regularized,
+        "lost_information": f.lost_information,
+        "light_rgb": f.light_rgb,
+        "argmin": f.argmin,
+        "roundtrip": rt,
+        "pixel": pixel,
+    })
+}
+
+/// The report of one fit without `--json`.
+fn fit_text(f: &fit::Fit, rt: &fit::RoundTrip, pixel: Option<&serde_json::Value>) -> String {
     let mut out = String::new();
     outln!(
         out,
@@ -183,20 +220,7 @@ pub(crate) fn run(a: FitArgs) -> anyhow::Result<()> {
         f.argmin.max_abs_difference
     );
     if f.mode != Mode::Paper {
-        for (i, row) in f.matrix.iter().enumerate() {
-            outln!(
-                out,
-                "  {}  {:>12.6} {:>12.6} {:>12.6}",
-                if i == 0 {
-                    "matrix W    "
-                } else {
-                    "            "
-                },
-                row[0],
-                row[1],
-                row[2]
-            );
-        }
+        write_matrix(&mut out, &f.matrix);
     }
     outln!(
         out,
@@ -223,19 +247,41 @@ pub(crate) fn run(a: FitArgs) -> anyhow::Result<()> {
         "  round trip      {} colours: CIEDE2000 mean {:.4}, p95 {:.4}, max {:.4}; negative SPD for {:.1}%",
         rt.colours, rt.mean_de2000, rt.p95_de2000, rt.max_de2000, 100.0 * rt.negative_fraction
     );
-    if let Some(p) = &pixel {
+    if let Some(p) = pixel {
+        write_pixel(&mut out, p);
+    }
+    out
+}
+
+/// The matrix W of the exact and non-negative modes, one row a line.
+fn write_matrix(out: &mut String, matrix: &[[f64; 3]; 3]) {
+    for (i, row) in matrix.iter().enumerate() {
         outln!(
             out,
-            "  rgb {}  coefficients {}, rendered {}, CIEDE2000 {:.4}, min SPD {:.3e}",
-            p["rgb"],
-            p["coefficients"],
-            p["rendered_rgb"],
-            p["dE2000"].as_f64().unwrap_or(f64::NAN),
-            p["min_spd"].as_f64().unwrap_or(f64::NAN)
+            "  {}  {:>12.6} {:>12.6} {:>12.6}",
+            if i == 0 {
+                "matrix W    "
+            } else {
+                "            "
+            },
+            row[0],
+            row[1],
+            row[2]
         );
     }
-    super::emit(&out);
-    Ok(())
+}
+
+/// The line of `--rgb`'s pixel.
+fn write_pixel(out: &mut String, p: &serde_json::Value) {
+    outln!(
+        out,
+        "  rgb {}  coefficients {}, rendered {}, CIEDE2000 {:.4}, min SPD {:.3e}",
+        p["rgb"],
+        p["coefficients"],
+        p["rendered_rgb"],
+        p["dE2000"].as_f64().unwrap_or(f64::NAN),
+        p["min_spd"].as_f64().unwrap_or(f64::NAN)
+    );
 }
 
 /// The plot of `specmap fit --plot`: the three weighted basis spectra and the light (.png, .svg).

@@ -375,7 +375,57 @@ impl RenderArgs {
     }
 }
 
+/// `specmap render`: the options and files checked, the scene, the backend and the quadrature;
+/// then the sweep, the sequence or the one image, and its report.
 pub(crate) fn run(mut a: RenderArgs) -> anyhow::Result<()> {
+    check_numbers(&a)?;
+    let preset = Preset::from(a.scene);
+    let size = a.image_size()?;
+    check_light(&a, preset)?;
+    let output = a
+        .output
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(format!("render-{}.png", preset.name())));
+    let sequence = take_sequence(&mut a)?;
+    check_files(&a, sequence.as_ref(), &output)?;
+    let (lighting, env_report) = load_env(&a)?.unzip();
+    let scene = scene_from(&a, preset, size, lighting)?;
+    let spectral = spectral_of(&a)?;
+    let gpu = open_gpu(a.backend)?;
+    let job = Job {
+        a: &a,
+        preset,
+        size,
+        scene: &scene,
+        spectral: &spectral,
+        backend: if gpu.is_some() {
+            Backend::Gpu
+        } else {
+            Backend::Cpu
+        },
+        gpu: gpu.as_ref(),
+        output: &output,
+    };
+    let chosen = choose_quadrature(&job, sequence.as_ref())?;
+    if let Some(counts) = &a.sweep {
+        return run_sweep(&job, counts);
+    }
+    if let Some(seq) = &sequence {
+        return render_sequence(&job, seq, chosen);
+    }
+    let single = render_single(&job, chosen)?;
+    let report = match a.json {
+        true => {
+            serde_json::to_string_pretty(&single_json(&job, &single, env_report.as_ref()))? + "\n"
+        }
+        false => single_text(&job, &single, env_report.as_ref()),
+    };
+    super::emit(&report);
+    Ok(())
+}
+
+/// `--exposure` within 64 stops and `--repeats` at least 1.
+fn check_numbers(a: &RenderArgs) -> anyhow::Result<()> {
     if !(a.exposure.is_finite() && a.exposure.abs() <= 64.0) {
         anyhow::bail!(
             "--exposure {}: stops must be between -64 and 64",
@@ -385,26 +435,36 @@ pub(crate) fn run(mut a: RenderArgs) -> anyhow::Result<()> {
     if a.repeats == 0 {
         anyhow::bail!("--repeats 0: the sweep needs at least one frame per wavelength count");
     }
-    let preset = Preset::from(a.scene);
-    let (w, h) = match &a.size {
-        Some(s) => size(s)?,
-        None => preset.default_size(),
-    };
+    Ok(())
+}
+
+/// The chart brings its own three lights: `--light` applies to it only with `--env`.
+fn check_light(a: &RenderArgs, preset: Preset) -> anyhow::Result<()> {
     if preset == Preset::Chart && a.env.is_none() && a.light != "D65" {
         anyhow::bail!("the chart compares D65, A and low-pressure sodium side by side; --light does not apply to it (--env lights one row of it)");
     }
-    let output = a
-        .output
-        .clone()
-        .unwrap_or_else(|| PathBuf::from(format!("render-{}.png", preset.name())));
-    // A sequence: the film at its ranges' starts, and the scene as built (each frame orbits
-    // it or scales its films).
+    Ok(())
+}
+
+/// A sequence: the film at its ranges' starts, and the scene as built (each frame orbits it or
+/// scales its films); `a` keeps the film's start and, for a turntable, no `--orbit`.
+fn take_sequence(a: &mut RenderArgs) -> anyhow::Result<Option<Sequence>> {
     let (film, ratio) = a.film.as_deref().map(film_range).transpose()?.unzip();
     a.film = film;
-    let sequence = Sequence::of(&a, ratio.flatten())?;
+    let sequence = Sequence::of(a, ratio.flatten())?;
     if matches!(sequence, Some(Sequence::Turntable { .. })) {
         a.orbit = None;
     }
+    Ok(sequence)
+}
+
+/// The files read and written (the sweep's, the sequence's frames or the one image), checked
+/// before any work.
+fn check_files(
+    a: &RenderArgs,
+    sequence: Option<&Sequence>,
+    output: &std::path::Path,
+) -> anyhow::Result<()> {
     let mut guard = super::guard::Guard::new();
     if let Some(p) = &a.env {
         guard.input("--env", p);
@@ -421,23 +481,24 @@ pub(crate) fn run(mut a: RenderArgs) -> anyhow::Result<()> {
             }
         }
         (Some(_), None) => {}
-        (None, _) => match &sequence {
+        (None, _) => match sequence {
             Some(seq) => {
                 for k in 0..seq.frames() {
-                    guard.output("-o", seq.file(&output, k));
+                    guard.output("-o", seq.file(output, k));
                 }
             }
             None => {
-                guard.output("-o", &output);
+                guard.output("-o", output);
             }
         },
     }
-    guard.check()?;
-    let (lighting, env_report) = load_env(&a)?.unzip();
-    let scene = scene_from(&a, preset, (w, h), lighting)?;
-    let spectral = spectral_of(&a)?;
-    // The backend.
-    let gpu = match a.backend {
+    guard.check()
+}
+
+/// The GPU of `--backend`: none for cpu, an error without an adapter for gpu, and for auto the
+/// CPU with a notice when there is none.
+fn open_gpu(backend: BackendArg) -> anyhow::Result<Option<Gpu>> {
+    Ok(match backend {
         BackendArg::Cpu => None,
         BackendArg::Gpu => Some(Gpu::new().context("--backend gpu")?),
         BackendArg::Auto => match Gpu::new() {
@@ -449,112 +510,162 @@ pub(crate) fn run(mut a: RenderArgs) -> anyhow::Result<()> {
                 None
             }
         },
-    };
-    let backend = if gpu.is_some() {
-        Backend::Gpu
-    } else {
-        Backend::Cpu
-    };
-    // The first frame: what a frame's cost is measured on (and, on the CPU, prepared once).
-    let first = match &sequence {
-        Some(seq) => seq.frame(&scene, 0)?,
-        None => scene.clone(),
+    })
+}
+
+/// What a render works with once the options are read.
+struct Job<'a> {
+    a: &'a RenderArgs,
+    preset: Preset,
+    /// The image size, WxH.
+    size: (usize, usize),
+    /// The scene as built (a sequence's frames orbit it or scale its films).
+    scene: &'a Scene,
+    spectral: &'a Spectral,
+    backend: Backend,
+    gpu: Option<&'a Gpu>,
+    /// The image, or the pattern of a sequence's frames.
+    output: &'a std::path::Path,
+}
+
+/// The quadrature, for every frame's scene and the view's range, and what choosing it measured
+/// (the first frame, on which a frame's cost is measured and, on the CPU, prepared once).
+fn choose_quadrature(
+    job: &Job,
+    sequence: Option<&Sequence>,
+) -> anyhow::Result<super::tolerance::Chosen> {
+    let first = match sequence {
+        Some(seq) => seq.frame(job.scene, 0)?,
+        None => job.scene.clone(),
     };
     let serving = super::tolerance::Serving {
-        gpu: gpu.as_ref(),
-        frames: sequence.as_ref().map_or(1, Sequence::frames),
+        gpu: job.gpu,
+        frames: sequence.map_or(1, Sequence::frames),
         first: &first,
     };
-    // The scene the quadrature must hold for: every frame's, and the view's range.
-    let mut fit_scene = match &sequence {
-        Some(seq) => seq.fit_scene(&scene),
-        None => scene.clone(),
+    let mut fit_scene = match sequence {
+        Some(seq) => seq.fit_scene(job.scene),
+        None => job.scene.clone(),
     };
-    if let Some(scales) = a.fit_range.as_deref().map(fit_range).transpose()? {
+    if let Some(scales) = job.a.fit_range.as_deref().map(fit_range).transpose()? {
         fit_scene.for_any_view(scales);
     }
-    let chosen = super::tolerance::quadrature_for(&fit_scene, &spectral, &a, &serving)?;
-    let (quadrature, selection, plan) = (chosen.quadrature, chosen.selection, chosen.plan);
-    let mut measured = chosen.prepared;
-    let adapter = gpu.as_ref().map(|g| g.adapter());
+    super::tolerance::quadrature_for(&fit_scene, job.spectral, job.a, &serving)
+}
 
-    if let Some(counts) = &a.sweep {
-        if counts.is_empty() {
-            anyhow::bail!("--sweep needs wavelength counts, e.g. 4,9,17,34,81,340");
-        }
-        let mut reports = vec![sweep::sweep(
-            &scene,
-            &spectral,
+/// `--sweep`: colour error against time for each wavelength count (and the CPU's too when auto
+/// found a GPU), as a table or JSON, and written into `--sweep-out`.
+fn run_sweep(job: &Job, counts: &[usize]) -> anyhow::Result<()> {
+    if counts.is_empty() {
+        anyhow::bail!("--sweep needs wavelength counts, e.g. 4,9,17,34,81,340");
+    }
+    let (scene, spectral, repeats) = (job.scene, job.spectral, job.a.repeats);
+    let mut reports = vec![sweep::sweep(
+        scene,
+        spectral,
+        counts,
+        job.backend,
+        job.gpu,
+        repeats,
+    )?];
+    if job.backend == Backend::Gpu && job.a.backend == BackendArg::Auto {
+        // Auto with a GPU: measure the CPU too, for the comparison.
+        reports.push(sweep::sweep(
+            scene,
+            spectral,
             counts,
-            backend,
-            gpu.as_ref(),
-            a.repeats,
-        )?];
-        if backend == Backend::Gpu && a.backend == BackendArg::Auto {
-            // Auto with a GPU: measure the CPU too, for the comparison.
-            reports.push(sweep::sweep(
-                &scene,
-                &spectral,
-                counts,
-                Backend::Cpu,
-                None,
-                a.repeats,
-            )?);
-        }
-        let table = sweep::markdown(&reports);
-        if let Some(dir) = &a.sweep_out {
-            std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-            specmap::io::write_atomic(&dir.join("sweep.md"), table.as_bytes())?;
-            specmap::io::write_atomic(
-                &dir.join("sweep.json"),
-                (serde_json::to_string_pretty(&reports)? + "\n").as_bytes(),
-            )?;
-            sweep::plot(&reports, &dir.join("sweep.png")).context("writing the sweep plot")?;
-            eprintln!("wrote {}/sweep.md, sweep.json, sweep.png", dir.display());
-        }
-        if a.json {
-            super::emit(&(serde_json::to_string_pretty(&reports)? + "\n"));
-        } else {
-            let mut out = String::new();
-            outln!(
-                out,
-                "speed for accuracy: {} {}x{}, colour error against the 1 nm render of the same backend",
-                scene.name,
-                scene.width,
-                scene.height
-            );
-            out.push_str(&table);
-            super::emit(&out);
-        }
-        return Ok(());
+            Backend::Cpu,
+            None,
+            repeats,
+        )?);
     }
+    let table = sweep::markdown(&reports);
+    if let Some(dir) = &job.a.sweep_out {
+        write_sweep(dir, &table, &reports)?;
+    }
+    if job.a.json {
+        super::emit(&(serde_json::to_string_pretty(&reports)? + "\n"));
+    } else {
+        let mut out = String::new();
+        outln!(
+            out,
+            "speed for accuracy: {} {}x{}, colour error against the 1 nm render of the same backend",
+            scene.name,
+            scene.width,
+            scene.height
+        );
+        out.push_str(&table);
+        super::emit(&out);
+    }
+    Ok(())
+}
 
-    if let Some(seq) = &sequence {
-        let t0 = Instant::now();
-        let frames = seq.render(
-            (&scene, measured),
-            &quadrature,
-            spectral.space,
-            gpu.as_ref(),
-            (&output, a.exposure),
-        )?;
-        let report = SequenceReport {
-            frames,
-            seconds: t0.elapsed().as_secs_f64(),
-            quadrature: &quadrature,
-            selection: selection.as_ref(),
-            plan: plan.as_ref(),
-        };
-        return report.emit(&scene, a.json, backend, gpu.as_ref().map(|g| g.adapter()));
-    }
+/// `--sweep-out DIR`: sweep.md, sweep.json and sweep.png.
+fn write_sweep(
+    dir: &std::path::Path,
+    table: &str,
+    reports: &[sweep::SweepReport],
+) -> anyhow::Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    specmap::io::write_atomic(&dir.join("sweep.md"), table.as_bytes())?;
+    specmap::io::write_atomic(
+        &dir.join("sweep.json"),
+        (serde_json::to_string_pretty(&reports)? + "\n").as_bytes(),
+    )?;
+    sweep::plot(reports, &dir.join("sweep.png")).context("writing the sweep plot")?;
+    eprintln!("wrote {}/sweep.md, sweep.json, sweep.png", dir.display());
+    Ok(())
+}
+
+/// `--turntable` or `--frames`: every frame rendered and written, then reported.
+fn render_sequence(
+    job: &Job,
+    seq: &Sequence,
+    chosen: super::tolerance::Chosen,
+) -> anyhow::Result<()> {
     let t0 = Instant::now();
-    let prepared = match measured.take() {
+    let frames = seq.render(
+        (job.scene, chosen.prepared),
+        &chosen.quadrature,
+        job.spectral.space,
+        job.gpu,
+        (job.output, job.a.exposure),
+    )?;
+    let report = SequenceReport {
+        frames,
+        seconds: t0.elapsed().as_secs_f64(),
+        quadrature: &chosen.quadrature,
+        selection: chosen.selection.as_ref(),
+        plan: chosen.plan.as_ref(),
+    };
+    report.emit(
+        job.scene,
+        job.a.json,
+        job.backend,
+        job.gpu.map(|g| g.adapter()),
+    )
+}
+
+/// One image rendered and written, with its timings.
+struct Single {
+    quadrature: specmap::quadrature::Quadrature,
+    selection: Option<specmap::quadrature::choose::Selection>,
+    plan: Option<specmap::render::plan::Plan>,
+    prepare_s: f64,
+    render_s: f64,
+    gpu_timing: Option<specmap::render::gpu::GpuTiming>,
+}
+
+/// The one image: prepared (unless choosing the quadrature did), rendered, written.
+fn render_single(job: &Job, chosen: super::tolerance::Chosen) -> anyhow::Result<Single> {
+    let t0 = Instant::now();
+    let prepared = match chosen.prepared {
         Some(p) => p,
-        None => Prepared::with_quadrature(&scene, &quadrature, spectral.space)?,
+        None => Prepared::with_quadrature(job.scene, &chosen.quadrature, job.spectral.space)?,
     };
     let prepare_s = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
-    let (image, gpu_timing) = match &gpu {
+    let (image, gpu_timing) = match job.gpu {
         Some(g) => {
             let (i, t) = g.render(&prepared)?;
             (i, Some(t))
@@ -563,88 +674,106 @@ pub(crate) fn run(mut a: RenderArgs) -> anyhow::Result<()> {
     };
     let render_s = t1.elapsed().as_secs_f64();
     image
-        .write(&output, a.exposure)
-        .with_context(|| format!("writing {}", output.display()))?;
+        .write(job.output, job.a.exposure)
+        .with_context(|| format!("writing {}", job.output.display()))?;
+    Ok(Single {
+        quadrature: chosen.quadrature,
+        selection: chosen.selection,
+        plan: chosen.plan,
+        prepare_s,
+        render_s,
+        gpu_timing,
+    })
+}
 
-    if a.json {
-        let uniform = quadrature.uniform_grid();
-        let doc = serde_json::json!({
-            "scene": preset.name(),
-            "size": [w, h],
-            "backend": backend,
-            "adapter": adapter,
-            "wavelengths": quadrature.len(),
-            "range": uniform.map(|(g, _)| g.to_string()),
-            "rule": uniform.map(|(_, r)| r),
-            "quadrature": quadrature.summary(selection.as_ref().map(|s| s.estimate_de2000)),
-            "quadrature_choice": selection,
-            "quadrature_plan": plan,
-            "light": scene.lightings.iter().map(|l| l.label.clone()).collect::<Vec<_>>(),
-            "env": env_report,
-            "prepare_s": prepare_s,
-            "render_s": render_s,
-            "gpu_timing": gpu_timing,
-            "exposure_ev": a.exposure,
-            "output": output.display().to_string(),
-        });
-        super::emit(&(serde_json::to_string_pretty(&doc)? + "\n"));
-        return Ok(());
-    }
+/// `--json` of the one image.
+fn single_json(job: &Job, s: &Single, env_report: Option<&env::EnvReport>) -> serde_json::Value {
+    let uniform = s.quadrature.uniform_grid();
+    serde_json::json!({
+        "scene": job.preset.name(),
+        "size": [job.size.0, job.size.1],
+        "backend": job.backend,
+        "adapter": job.gpu.map(|g| g.adapter()),
+        "wavelengths": s.quadrature.len(),
+        "range": uniform.map(|(g, _)| g.to_string()),
+        "rule": uniform.map(|(_, r)| r),
+        "quadrature": s.quadrature.summary(s.selection.as_ref().map(|s| s.estimate_de2000)),
+        "quadrature_choice": s.selection,
+        "quadrature_plan": s.plan,
+        "light": job.scene.lightings.iter().map(|l| l.label.clone()).collect::<Vec<_>>(),
+        "env": env_report,
+        "prepare_s": s.prepare_s,
+        "render_s": s.render_s,
+        "gpu_timing": s.gpu_timing,
+        "exposure_ev": job.a.exposure,
+        "output": job.output.display().to_string(),
+    })
+}
+
+/// The report of the one image without `--json`.
+fn single_text(job: &Job, s: &Single, env_report: Option<&env::EnvReport>) -> String {
+    let (w, h) = job.size;
     let mut out = String::new();
     outln!(
         out,
-        "rendered {} {w}x{h}, {} wavelengths ({}) on the {backend}{}",
-        preset.name(),
-        quadrature.len(),
-        quadrature,
-        adapter
-            .as_ref()
+        "rendered {} {w}x{h}, {} wavelengths ({}) on the {}{}",
+        job.preset.name(),
+        s.quadrature.len(),
+        s.quadrature,
+        job.backend,
+        job.gpu
+            .map(|g| g.adapter())
             .map(|a| format!(" ({}, {})", a.name, a.backend))
             .unwrap_or_default()
     );
-    if let Some(p) = &plan {
+    if let Some(p) = &s.plan {
         super::tolerance::write_plan(&mut out, p);
     }
-    if let Some(c) = &selection {
+    if let Some(c) = &s.selection {
         super::tolerance::write_selection(&mut out, c);
     }
-    if let Some(r) = &env_report {
-        outln!(
-            out,
-            "  environment {} ({}), made under {}, sun {}",
-            r.file,
-            r.kind,
-            r.light,
-            match r.sun_direction {
-                Some(d) => format!(
-                    "at ({:.3}, {:.3}, {:.3}) as a directional light",
-                    d[0], d[1], d[2]
-                ),
-                None => "not found".into(),
-            }
-        );
-        match &r.projection {
-            Some(p) => outln!(out, "  lit by its own spectra: {}", p.summary),
-            None if !r.light_used => outln!(
-                out,
-                "  lit by the {} spectra the file stores (--light does not apply)",
-                r.spectra
-            ),
-            None => {}
-        }
+    if let Some(r) = env_report {
+        write_env_report(&mut out, r);
     }
     outln!(
         out,
         "  prepare {:.1} ms, render {:.1} ms{}",
-        prepare_s * 1e3,
-        render_s * 1e3,
-        gpu_timing
+        s.prepare_s * 1e3,
+        s.render_s * 1e3,
+        s.gpu_timing
+            .as_ref()
             .map(|t| format!(" (GPU compute {:.1} ms)", t.compute_s * 1e3))
             .unwrap_or_default()
     );
-    outln!(out, "wrote {}", output.display());
-    super::emit(&out);
-    Ok(())
+    outln!(out, "wrote {}", job.output.display());
+    out
+}
+
+/// The environment's lines of the report: its file, light and sun, and which spectra light it.
+fn write_env_report(out: &mut String, r: &env::EnvReport) {
+    outln!(
+        out,
+        "  environment {} ({}), made under {}, sun {}",
+        r.file,
+        r.kind,
+        r.light,
+        match r.sun_direction {
+            Some(d) => format!(
+                "at ({:.3}, {:.3}, {:.3}) as a directional light",
+                d[0], d[1], d[2]
+            ),
+            None => "not found".into(),
+        }
+    );
+    match &r.projection {
+        Some(p) => outln!(out, "  lit by its own spectra: {}", p.summary),
+        None if !r.light_used => outln!(
+            out,
+            "  lit by the {} spectra the file stores (--light does not apply)",
+            r.spectra
+        ),
+        None => {}
+    }
 }
 
 /// The environment of `--env` as a lighting, and what loading found.

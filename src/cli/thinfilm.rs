@@ -4,11 +4,13 @@
 use super::outln;
 use anyhow::Context;
 use clap::{Args, ValueEnum};
-use specmap::colorimetry::{srgb8, Cmfs, Observer, RgbSpace};
+use specmap::colorimetry::{srgb8, Cmfs, Observer, RgbSpace, Xyz};
 use specmap::data::{self, Table};
 use specmap::plot::{self, Figure, Series};
 use specmap::spectrum::{Interpolation, Rule, Spectrum};
-use specmap::thinfilm::{Coherence, Incidence, Index, Layer, Material, Polarization, Stack};
+use specmap::thinfilm::{
+    Coherence, Incidence, Index, Layer, Material, Polarization, Response, Stack,
+};
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -157,6 +159,8 @@ fn layers(spec: &str) -> anyhow::Result<Vec<Layer>> {
         .collect()
 }
 
+/// `specmap thinfilm`: the plot's files checked, the stack's R, T and A, the colour it
+/// reflects, the plot; then the report as JSON or text.
 pub(crate) fn run(a: ThinfilmArgs) -> anyhow::Result<()> {
     if let Some(p) = &a.plot {
         super::guard::Guard::new()
@@ -167,24 +171,49 @@ pub(crate) fn run(a: ThinfilmArgs) -> anyhow::Result<()> {
             .output("--plot", p)
             .check()?;
     }
+    let film = film_response(&a)?;
+    let colour = reflected_colour(&a, &film)?;
+    if let Some(path) = &a.plot {
+        write_plot(&a, &film, colour.srgb8, path)?;
+    }
+    let report = match a.json {
+        true => serde_json::to_string_pretty(&film_json(&a, &film, &colour))? + "\n",
+        false => film_text(&a, &film, &colour),
+    };
+    super::emit(&report);
+    Ok(())
+}
+
+/// The stack's response over the grid.
+struct Film {
+    pol: Polarization,
+    /// R, T, the grid and the layers computed incoherently.
+    response: Response,
+    wavelengths: Vec<f64>,
+    /// 1 - R - T.
+    absorbed: Vec<f64>,
+    /// The incoherent layers, counted from 1.
+    incoherent: Vec<usize>,
+}
+
+/// The stack of `--ambient`, `--layers` and `--substrate` at `--angle`: R, T and A.
+fn film_response(a: &ThinfilmArgs) -> anyhow::Result<Film> {
     let layer_list = layers(&a.layers)?;
     let substrate = material(&a.substrate).map_err(|e| anyhow::anyhow!("substrate: {e}"))?;
     let ambient = material(&a.ambient).map_err(|e| anyhow::anyhow!("ambient: {e}"))?;
     let incidence = Incidence::degrees(a.angle)?;
     let pol = Polarization::from(a.pol);
-    let rule = Rule::from(a.spectral.rule);
     let grid = a.spectral.range;
     let stack = Stack::new(ambient, layer_list, substrate);
     let coherence = match a.coherence {
         CoherenceArg::Auto => Coherence::Auto,
         CoherenceArg::Coherent => Coherence::Coherent,
     };
-    let resp = stack.response(&grid, &incidence, pol, coherence)?;
-    let wavelengths: Vec<f64> = grid.wavelengths_nm().collect();
-    let absorbed: Vec<f64> = resp
+    let response = stack.response(&grid, &incidence, pol, coherence)?;
+    let absorbed: Vec<f64> = response
         .reflectance
         .iter()
-        .zip(&resp.transmittance)
+        .zip(&response.transmittance)
         .map(|(r, t)| {
             // Rounding noise of a lossless stack reads as 0, not -1e-17.
             let a = 1.0 - r - t;
@@ -195,104 +224,150 @@ pub(crate) fn run(a: ThinfilmArgs) -> anyhow::Result<()> {
             }
         })
         .collect();
+    Ok(Film {
+        pol,
+        wavelengths: grid.wavelengths_nm().collect(),
+        absorbed,
+        incoherent: response.incoherent_layers.iter().map(|i| i + 1).collect(),
+        response,
+    })
+}
 
+/// The colour the film reflects under `--under`.
+struct Reflected {
+    /// The light's label.
+    light: String,
+    observer: Observer,
+    rule: Rule,
+    xyz: Xyz,
+    linear_srgb: [f64; 3],
+    srgb8: [u8; 3],
+}
+
+/// The film's reflectance under `--under`, integrated with `--observer` and `--rule`.
+fn reflected_colour(a: &ThinfilmArgs, film: &Film) -> anyhow::Result<Reflected> {
+    let grid = a.spectral.range;
+    let rule = Rule::from(a.spectral.rule);
     let observer = Observer::from(a.spectral.observer);
     let cmfs = Cmfs::new(observer, &grid)?;
     let light = data::spectrum(&a.under)?;
     let s = light.data.resample(&grid, Interpolation::LIGHT);
-    let r = Spectrum::new(grid, resp.reflectance.clone())?;
+    let r = Spectrum::new(grid, film.response.reflectance.clone())?;
     let xyz = cmfs.reflectance_xyz(&r, &s, rule)?;
     let linear_srgb = RgbSpace::SRGB.rgb_from_xyz(xyz);
-    let code = srgb8(linear_srgb);
-    let incoherent: Vec<usize> = resp.incoherent_layers.iter().map(|i| i + 1).collect();
+    Ok(Reflected {
+        light: light.label,
+        observer,
+        rule,
+        xyz,
+        linear_srgb,
+        srgb8: srgb8(linear_srgb),
+    })
+}
 
-    if let Some(path) = &a.plot {
-        let series = [
-            ("R", &resp.reflectance),
-            ("T", &resp.transmittance),
-            ("A", &absorbed),
-        ]
-        .into_iter()
-        .enumerate()
-        .map(|(i, (label, v))| Series {
-            label: label.to_string(),
-            points: wavelengths.iter().copied().zip(v.iter().copied()).collect(),
-            color: if i == 0 { code } else { plot::palette(i) },
-        })
-        .collect();
-        plot::write(
-            &Figure {
-                title: format!("Thin film {} at {}°, {pol}", describe(&a), a.angle),
-                x_label: "Wavelength (nm)".into(),
-                y_label: "Fraction of incident power".into(),
-                series,
-            },
-            path,
-        )
-        .context("writing the plot")?;
-        eprintln!("wrote {}", path.display());
-    }
+/// `--plot`: R (in the reflected colour), T and A against wavelength.
+fn write_plot(
+    a: &ThinfilmArgs,
+    film: &Film,
+    code: [u8; 3],
+    path: &std::path::Path,
+) -> anyhow::Result<()> {
+    let series = [
+        ("R", &film.response.reflectance),
+        ("T", &film.response.transmittance),
+        ("A", &film.absorbed),
+    ]
+    .into_iter()
+    .enumerate()
+    .map(|(i, (label, v))| Series {
+        label: label.to_string(),
+        points: film
+            .wavelengths
+            .iter()
+            .copied()
+            .zip(v.iter().copied())
+            .collect(),
+        color: if i == 0 { code } else { plot::palette(i) },
+    })
+    .collect();
+    plot::write(
+        &Figure {
+            title: format!("Thin film {} at {}°, {}", describe(a), a.angle, film.pol),
+            x_label: "Wavelength (nm)".into(),
+            y_label: "Fraction of incident power".into(),
+            series,
+        },
+        path,
+    )
+    .context("writing the plot")?;
+    eprintln!("wrote {}", path.display());
+    Ok(())
+}
 
-    if a.json {
-        let doc = serde_json::json!({
-            "ambient": a.ambient,
-            "layers": a.layers,
-            "substrate": a.substrate,
-            "angle_deg": a.angle,
-            "pol": pol,
-            "range": grid.to_string(),
-            "wavelengths_nm": wavelengths,
-            "R": resp.reflectance,
-            "T": resp.transmittance,
-            "A": absorbed,
-            "incoherent_layers": incoherent,
-            "under": light.label,
-            "rule": rule,
-            "XYZ": xyz.0,
-            "xy": xyz.xy(),
-            "linear_srgb": linear_srgb,
-            "srgb8": code,
-        });
-        super::emit(&(serde_json::to_string_pretty(&doc)? + "\n"));
-        return Ok(());
-    }
+/// `--json`: the stack, its spectra and the reflected colour.
+fn film_json(a: &ThinfilmArgs, film: &Film, c: &Reflected) -> serde_json::Value {
+    serde_json::json!({
+        "ambient": a.ambient,
+        "layers": a.layers,
+        "substrate": a.substrate,
+        "angle_deg": a.angle,
+        "pol": film.pol,
+        "range": a.spectral.range.to_string(),
+        "wavelengths_nm": film.wavelengths,
+        "R": film.response.reflectance,
+        "T": film.response.transmittance,
+        "A": film.absorbed,
+        "incoherent_layers": film.incoherent,
+        "under": c.light,
+        "rule": c.rule,
+        "XYZ": c.xyz.0,
+        "xy": c.xyz.xy(),
+        "linear_srgb": c.linear_srgb,
+        "srgb8": c.srgb8,
+    })
+}
 
+/// The report without `--json`: the stack, the reflected colour, then R, T and A per wavelength.
+fn film_text(a: &ThinfilmArgs, film: &Film, c: &Reflected) -> String {
+    let grid = a.spectral.range;
     let mut out = String::new();
     outln!(
         out,
-        "thin film {}\n  {}°, {pol}, {} nm",
-        describe(&a),
+        "thin film {}\n  {}°, {}, {} nm",
+        describe(a),
         a.angle,
+        film.pol,
         grid
     );
-    if !incoherent.is_empty() {
+    if !film.incoherent.is_empty() {
         outln!(
             out,
             "  layer(s) {:?} computed incoherently: their fringes get fewer than two samples \
              at the {} nm step",
-            incoherent,
+            film.incoherent,
             grid.step_nm()
         );
     }
     outln!(
         out,
-        "reflected colour under {} ({observer}, {rule} rule)",
-        light.label
+        "reflected colour under {} ({}, {} rule)",
+        c.light,
+        c.observer,
+        c.rule
     );
-    super::write_xyz(&mut out, xyz);
-    super::write_srgb8(&mut out, code);
+    super::write_xyz(&mut out, c.xyz);
+    super::write_srgb8(&mut out, c.srgb8);
     outln!(out, "\n  wavelength_nm         R         T         A");
-    for (i, w) in wavelengths.iter().enumerate() {
+    for (i, w) in film.wavelengths.iter().enumerate() {
         outln!(
             out,
             "  {w:>13} {:>9.6} {:>9.6} {:>9.6}",
-            resp.reflectance[i],
-            resp.transmittance[i],
-            absorbed[i]
+            film.response.reflectance[i],
+            film.response.transmittance[i],
+            film.absorbed[i]
         );
     }
-    super::emit(&out);
-    Ok(())
+    out
 }
 
 /// `1.0 | 2.7:270 | 1.45` for titles.

@@ -2,6 +2,8 @@
 
 use super::{mode_name, Converted, Run};
 use crate::cli::outln;
+use specmap::envmap::convert::ConvertReport;
+use specmap::envmap::roundtrip::FileRoundTrip;
 
 const CSS: &str = "\
 body{font-family:system-ui,-apple-system,'Segoe UI',sans-serif;max-width:1100px;margin:2em auto;
@@ -212,42 +214,63 @@ fn fit_section(o: &mut String, run: &Run) {
     commands(o, &[table, plot]);
 }
 
+/// The facts table of one converted map.
 fn convert_facts(o: &mut String, c: &Converted) {
-    let r = &c.report;
     outln!(o, "<table class=\"facts\">");
-    let row = |o: &mut String, k: &str, v: String| {
+    for (k, v) in convert_rows(c) {
         outln!(o, "<tr><th>{}</th><td>{}</td></tr>", esc(k), esc(&v));
-    };
-    row(
-        o,
-        "input",
+    }
+    outln!(o, "</table>");
+}
+
+/// The facts of one converted map, as (name, text) rows.
+fn convert_rows(c: &Converted) -> Vec<(&'static str, String)> {
+    let r = &c.report;
+    let input = format!(
+        "{} {}×{} ({})",
+        r.input_layout.name(),
+        r.input_size[0],
+        r.input_size[1],
+        r.input_description
+    );
+    let mut rows = vec![("input", input), ("lights", lights_text(r))];
+    rows.extend(mode_rows(r));
+    rows.push(("sun", crate::cli::convert::sun_text(r)));
+    rows.push((
+        "output",
+        format!("{} {}", c.file, crate::cli::convert::output_text(r)),
+    ));
+    rows.push(("round trip (file)", round_trip_text(&c.round_trip)));
+    rows.push((
+        "time",
         format!(
-            "{} {}×{} ({})",
-            r.input_layout.name(),
-            r.input_size[0],
-            r.input_size[1],
-            r.input_description
+            "read {:.2} s, convert + write {:.2} s (EXR encoding {:.2} s)",
+            r.seconds_read, r.seconds_convert, r.seconds_encode
         ),
-    );
-    row(
-        o,
-        "lights",
-        r.lights
-            .iter()
-            .map(|l| {
-                format!(
-                    "{} {} ({:.1}%)",
-                    format!("{:?}", l.kind).to_lowercase(),
-                    l.spd,
-                    100.0 * l.energy_share
-                )
-            })
-            .collect::<Vec<_>>()
-            .join(", "),
-    );
+    ));
+    rows
+}
+
+/// The map's lights, each with its share of the energy.
+fn lights_text(r: &ConvertReport) -> String {
+    r.lights
+        .iter()
+        .map(|l| {
+            format!(
+                "{} {} ({:.1}%)",
+                format!("{:?}", l.kind).to_lowercase(),
+                l.spd,
+                100.0 * l.energy_share
+            )
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The rows of the conversion's mode: the carriers (faithful), else the main light and the fit.
+fn mode_rows(r: &ConvertReport) -> Vec<(&'static str, String)> {
     if r.mode == "faithful" {
-        row(
-            o,
+        return vec![(
             "spectra",
             format!(
                 "{} carriers and {} mixes of them; {} pixels no non-negative spectrum under their \
@@ -257,59 +280,35 @@ fn convert_facts(o: &mut String, c: &Converted) {
                 r.spectra.nearest,
                 r.spectra.negative
             ),
-        );
-    } else {
-        row(
-            o,
-            "main light",
-            match &r.light_choice {
-                Some(l) => format!("{} (auto: {})", r.light, l.reason),
-                None => r.light.clone(),
-            },
-        );
-        row(
-            o,
-            "fit",
-            format!(
-                "{} mode, weights {:.4} {:.4} {:.4}, condition {:.3}{}",
-                r.mode,
-                r.weights[0],
-                r.weights[1],
-                r.weights[2],
-                r.condition_number,
-                if r.regularized { " (reduced)" } else { "" }
-            ),
-        );
+        )];
     }
-    row(o, "sun", crate::cli::convert::sun_text(r));
-    row(
-        o,
-        "output",
-        format!("{} {}", c.file, crate::cli::convert::output_text(r)),
+    let light = match &r.light_choice {
+        Some(l) => format!("{} (auto: {})", r.light, l.reason),
+        None => r.light.clone(),
+    };
+    let fit = format!(
+        "{} mode, weights {:.4} {:.4} {:.4}, condition {:.3}{}",
+        r.mode,
+        r.weights[0],
+        r.weights[1],
+        r.weights[2],
+        r.condition_number,
+        if r.regularized { " (reduced)" } else { "" }
     );
-    let rt = &c.round_trip;
-    row(
-        o,
-        "round trip (file)",
-        format!(
-            "CIEDE2000 energy-weighted mean {:.4}, max {:.4}; without the {} sun pixels: mean \
-             {:.4}, max {:.4}",
-            rt.all.weighted_mean_de2000,
-            rt.all.max_de2000,
-            rt.sun_pixels,
-            rt.without_sun.weighted_mean_de2000,
-            rt.without_sun.max_de2000
-        ),
-    );
-    row(
-        o,
-        "time",
-        format!(
-            "read {:.2} s, convert + write {:.2} s (EXR encoding {:.2} s)",
-            r.seconds_read, r.seconds_convert, r.seconds_encode
-        ),
-    );
-    outln!(o, "</table>");
+    vec![("main light", light), ("fit", fit)]
+}
+
+/// The file round trip's CIEDE2000, with and without the sun.
+fn round_trip_text(rt: &FileRoundTrip) -> String {
+    format!(
+        "CIEDE2000 energy-weighted mean {:.4}, max {:.4}; without the {} sun pixels: mean {:.4}, \
+         max {:.4}",
+        rt.all.weighted_mean_de2000,
+        rt.all.max_de2000,
+        rt.sun_pixels,
+        rt.without_sun.weighted_mean_de2000,
+        rt.without_sun.max_de2000
+    )
 }
 
 fn convert_section(o: &mut String, run: &Run) {
