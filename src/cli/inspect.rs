@@ -46,7 +46,7 @@ pub fn run(a: InspectArgs) -> anyhow::Result<()> {
     let inspection =
         convert::inspect(&a.input, &opts).with_context(|| format!("inspecting {}", a.input))?;
     let overlay = match &a.overlay {
-        Some(path) => Some(write_overlay(path, &inspection.map, &inspection.scene)?),
+        Some(path) => Some(write_overlay(path, inspection.map(), &inspection.scene)?),
         None => None,
     };
     if a.json {

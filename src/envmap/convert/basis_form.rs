@@ -117,6 +117,19 @@ pub fn analyse(spectral: &Path) -> Result<Analysis> {
     })
 }
 
+/// Whether `name` is one of the attributes the basis form writes itself (`specmap.basisVersion`,
+/// `specmap.basisK`, `specmap.wavelengths`, `specmap.basis00`..., `specmap.basisSun`). The fit's
+/// `specmap.basis` (its three reflectances' names) is not.
+fn is_basis_form_attribute(name: &str) -> bool {
+    match name.strip_prefix("specmap.basis") {
+        Some(rest) => {
+            matches!(rest, "Version" | "K" | "Sun")
+                || (!rest.is_empty() && rest.bytes().all(|b| b.is_ascii_digit()))
+        }
+        None => name == "specmap.wavelengths",
+    }
+}
+
 /// The basis form's header: the spectral file's `specmap.*` attributes and the K spectra.
 fn header(spectral: &[(String, AttrValue)], a: &Analysis) -> Vec<(String, AttrValue)> {
     let kb = a.basis.len();
@@ -124,11 +137,7 @@ fn header(spectral: &[(String, AttrValue)], a: &Analysis) -> Vec<(String, AttrVa
     let floats = |v: &[f64]| AttrValue::F32Vec(v.iter().map(|&x| x as f32).collect());
     let mut attributes: Vec<(String, AttrValue)> = spectral
         .iter()
-        .filter(|(n, _)| {
-            n.starts_with("specmap.")
-                && !n.starts_with("specmap.basis")
-                && n != "specmap.wavelengths"
-        })
+        .filter(|(n, _)| n.starts_with("specmap.") && !is_basis_form_attribute(n))
         .cloned()
         .collect();
     attributes.push(("specmap.basisVersion".into(), AttrValue::I32(2)));

@@ -1,21 +1,20 @@
 //! The conversion's last stage: stream the planned spectra into the OpenEXR file, a batch of
 //! rows at a time, and measure what was written (round trip, which spectrum each pixel took).
 
+use crate::envmap::convert::basis_form::{self, BasisStats};
 use crate::envmap::convert::carriers::{self, Written};
 use crate::envmap::convert::coefficient_rows::{self, RowMut, SpectralRows};
-use crate::envmap::convert::pixel_spectra::{Engine, PixelKind, Took};
-use crate::envmap::convert::plan::{PixelPlan, Plan};
-use crate::envmap::convert::OutputFormat;
+use crate::envmap::convert::file_plan::{FilePlan, Output, Precisions};
+use crate::envmap::convert::pixel_spectra::{Engine, Took};
+use crate::envmap::convert::pixels::{PixelPlan, Pixels};
+use crate::envmap::convert::plan::Plan;
 use crate::envmap::files::{
-    spectral_channel_name, AttrValue, ChannelSet, Compression, EnvmapAttr, Precision,
-    SpectralLayout, SpectralWriter, HALF_MAX,
+    spectral_channel_name, ChannelSet, EnvmapAttr, Precision, SpectralLayout, SpectralWriter,
 };
-use crate::envmap::layout::{EnvMap, Layout};
-use crate::envmap::roundtrip::metric::RgbMetric;
+use crate::envmap::layout::Layout;
 use crate::envmap::roundtrip::stats::{Floor, RoundTripAccumulator, RoundTripStats};
 use crate::envmap::scene::Cells;
-use crate::error::Result;
-use crate::fit::Mode;
+use crate::error::{Error, Result};
 use rayon::prelude::*;
 use std::path::Path;
 use std::time::Instant;
@@ -90,165 +89,6 @@ impl Tally {
     }
 }
 
-/// One pixel's spectrum, whichever engine the plan chose.
-struct Pixels<'a> {
-    map: &'a EnvMap,
-    cells: &'a Cells,
-    plan: &'a Plan,
-}
-
-impl Pixels<'_> {
-    /// What a written pixel took and whether its round trip is exact. The carriers say so
-    /// themselves; the paper's basis is exact in its exact mode, for white only in the paper
-    /// mode, and where the spectrum stays non-negative in the nonneg mode, whose other pixels
-    /// get the nearest non-negative spectrum: so its pixels are exact when their round trip is.
-    fn exactness(&self, w: Written, de: f64) -> (Took, bool) {
-        match &self.plan.pixels {
-            PixelPlan::Carriers { .. } => (w.took, w.exact),
-            PixelPlan::Basis { .. } => {
-                let exact = de == 0.0;
-                let nearest =
-                    !exact && w.took == Took::Colorchecker && self.plan.fit.mode == Mode::Nonneg;
-                (if nearest { Took::Nearest } else { w.took }, exact)
-            }
-        }
-    }
-
-    fn metric(&self) -> &RgbMetric {
-        match &self.plan.pixels {
-            PixelPlan::Basis { engine, .. } => engine.metric(),
-            PixelPlan::Carriers { engine, .. } => engine.metric(),
-        }
-    }
-
-    /// The paper's modes: what pixel (x, y) is (the sun's, above the horizon, or plain), and
-    /// whether it is the sun's.
-    fn basis_kind(&self, x: usize, y: usize) -> (PixelKind, bool) {
-        let PixelPlan::Basis { sun, .. } = &self.plan.pixels else {
-            return (PixelKind::Plain, false);
-        };
-        let cell = self.cells.cell_of_pixel(self.map, x, y).unwrap_or(0);
-        if sun[cell] {
-            (PixelKind::Sun, true)
-        } else if self.map.direction(x, y).is_some_and(|d| d[1] > 0.0) {
-            (PixelKind::Sky, false)
-        } else {
-            (PixelKind::Plain, false)
-        }
-    }
-
-    /// Writes pixel (x, y)'s spectrum into `out`; the basis format's coefficients into `coef`.
-    fn spectrum(&self, x: usize, y: usize, out: &mut [f32], coef: &mut [f32]) -> (Written, bool) {
-        let rgb = self.map.image.get(x, y);
-        let cell = self.cells.cell_of_pixel(self.map, x, y).unwrap_or(0);
-        match &self.plan.pixels {
-            PixelPlan::Basis { engine, .. } => {
-                let kind = self.basis_kind(x, y).0;
-                if self.plan.format == OutputFormat::Basis {
-                    let c = engine.coefficients(rgb, kind == PixelKind::Sun);
-                    for k in 0..4 {
-                        coef[k] = c[k] as f32;
-                    }
-                }
-                let r = engine.spectrum(rgb, kind, out);
-                let w = Written {
-                    rgb_back: r.rgb_back,
-                    took: r.took,
-                    exact: true,
-                };
-                (w, kind == PixelKind::Sun && r.took == Took::Sun)
-            }
-            PixelPlan::Carriers { engine, assign } => {
-                let a = assign[cell];
-                let w = engine.spectrum(rgb, a, out);
-                (w, a.sun && w.took == Took::Sun)
-            }
-        }
-    }
-}
-
-/// What the EV scale and the precision came to.
-#[derive(Debug, Clone, serde::Serialize)]
-pub struct Precisions {
-    pub precision: Precision,
-    /// Values were divided by 2^EV to fit half floats (None: not needed).
-    pub ev: Option<f64>,
-    /// Pixels whose every value is below half's smallest (written as 0 in half at any EV).
-    pub below_half: usize,
-    /// Why the precision is what it is, when it is not what was asked.
-    pub reason: Option<String>,
-}
-
-/// The EV scale for half floats: the peak of every value written, and how many pixels an EV
-/// scale would flush to zero. A scale that would flush pixels that half holds unscaled makes the
-/// file float instead (nothing is lost silently).
-pub fn precisions(map: &EnvMap, cells: &Cells, plan: &Plan, asked: Precision) -> Precisions {
-    if asked == Precision::Float {
-        return Precisions {
-            precision: asked,
-            ev: None,
-            below_half: 0,
-            reason: None,
-        };
-    }
-    let px = Pixels { map, cells, plan };
-    let bands = plan.grid.len();
-    let width = map.image.width;
-    // Per pixel: its largest magnitude, binned by binary exponent.
-    let (peak, bins) = (0..map.image.height)
-        .into_par_iter()
-        .map(|y| {
-            let mut out = vec![0f32; bands];
-            let mut coef = [0f32; 4];
-            let mut bins = [0usize; 300];
-            let mut peak = 0f32;
-            for x in 0..width {
-                if map.direction(x, y).is_none() {
-                    continue;
-                }
-                px.spectrum(x, y, &mut out, &mut coef);
-                let values: &[f32] = match plan.format {
-                    OutputFormat::Spectral => &out,
-                    OutputFormat::Basis => &coef,
-                };
-                let rgb = map.image.get(x, y);
-                let p = values.iter().chain(&rgb).fold(0f32, |m, v| m.max(v.abs()));
-                peak = peak.max(p);
-                if p > 0.0 && p.is_finite() {
-                    bins[(p.log2().floor() as i32 + 150).clamp(0, 299) as usize] += 1;
-                }
-            }
-            (peak, bins)
-        })
-        .reduce(
-            || (0f32, [0usize; 300]),
-            |a, b| (a.0.max(b.0), std::array::from_fn(|k| a.1[k] + b.1[k])),
-        );
-    // Half's smallest subnormal is 2^-24: values below 2^-25 round to 0.
-    let flushed =
-        |ev: i32| -> usize { bins[..(ev - 25 + 150).clamp(0, 300) as usize].iter().sum() };
-    let below_half = flushed(0);
-    let ev = (peak as f64 > HALF_MAX as f64).then(|| (peak as f64 / HALF_MAX as f64).log2().ceil());
-    match ev {
-        Some(e) if flushed(e as i32) > below_half => Precisions {
-            precision: Precision::Float,
-            ev: None,
-            below_half: 0,
-            reason: Some(format!(
-                "half floats would need values / 2^{e} (EV), which would flush {} more pixels \
-                 to zero: written as float instead",
-                flushed(e as i32) - below_half
-            )),
-        },
-        _ => Precisions {
-            precision: asked,
-            ev,
-            below_half,
-            reason: None,
-        },
-    }
-}
-
 /// What the write did.
 #[derive(Debug, Clone)]
 pub struct WriteStats {
@@ -261,40 +101,97 @@ pub struct WriteStats {
     pub roundtrip_without_sun: RoundTripStats,
     /// Over the pixels whose spectrum could not reproduce their RGB.
     pub roundtrip_inexact: RoundTripStats,
+    /// The basis form: how its K spectra hold the spectral form's.
+    pub basis: Option<BasisStats>,
+    /// What the write found it could not keep, in words.
+    pub notes: Vec<String>,
     pub seconds: f64,
     pub seconds_encode: f64,
 }
 
-/// The output's channel names: the bands, R, G, B and the sun mask; or the basis form's.
-fn channel_names(plan: &Plan) -> Vec<String> {
-    match plan.format {
-        OutputFormat::Spectral => plan
-            .grid
-            .wavelengths_nm()
-            .map(spectral_channel_name)
-            .chain(["R", "G", "B", "sun"].map(String::from))
-            .collect(),
-        OutputFormat::Basis => ["c_R", "c_G", "c_B", "sun"].map(String::from).to_vec(),
+/// Writes the planned file: the spectral form, or the basis form factored from a spectral
+/// intermediate (written as float beside the output, read twice, removed).
+pub fn write(
+    plan: &Plan,
+    cells: &Cells,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<WriteStats> {
+    let Some(path) = plan.file.path.as_deref() else {
+        return Err(Error::invalid(
+            "this conversion was planned without an output file (inspect's plan): nothing to \
+             write",
+        ));
+    };
+    match &plan.file.output {
+        Output::Spectral { precision } => write_spectral(plan, cells, precision, path, progress),
+        Output::Basis {
+            intermediate,
+            precision,
+        } => {
+            let spectral = intermediate.as_deref().unwrap_or(path);
+            let stats = write_spectral(plan, cells, &Precisions::float(), spectral, progress)?;
+            let basis = write_basis(spectral, path, *precision, &plan.file);
+            let _ = std::fs::remove_file(spectral);
+            with_basis(stats, basis?)
+        }
     }
 }
 
-/// Settings of the written file besides its pixels.
-pub struct FileSettings {
-    pub precision: Precisions,
-    pub compression: Compression,
-    pub zip_level: u8,
-    pub attributes: Vec<(String, AttrValue)>,
+/// The basis form of the spectral file at `spectral`, written to `output`.
+fn write_basis(
+    spectral: &Path,
+    output: &Path,
+    precision: Precision,
+    file: &FilePlan,
+) -> Result<(BasisStats, u64)> {
+    let a = basis_form::analyse(spectral)?;
+    basis_form::write(
+        spectral,
+        &a,
+        output,
+        precision,
+        file.compression,
+        file.zip_level,
+    )
 }
 
-/// Streams the map's spectra into `output`.
-pub fn write(
-    map: &EnvMap,
-    cells: &Cells,
+/// The spectral write's statistics with the basis form's file in place of the intermediate.
+fn with_basis(stats: WriteStats, (basis, bytes): (BasisStats, u64)) -> Result<WriteStats> {
+    let mut notes = stats.notes;
+    if basis.below_half > 0 {
+        notes.push(format!(
+            "{} pixels' coefficients are all below what half floats hold after the EV \
+             scale: written as 0 (--precision float keeps them)",
+            basis.below_half
+        ));
+    }
+    Ok(WriteStats {
+        channels: basis.k + 3,
+        bytes,
+        basis: Some(basis),
+        notes,
+        ..stats
+    })
+}
+
+/// The output's channel names: the bands, R, G, B and the sun mask.
+fn channel_names(plan: &Plan) -> Vec<String> {
+    plan.grid
+        .wavelengths_nm()
+        .map(spectral_channel_name)
+        .chain(["R", "G", "B", "sun"].map(String::from))
+        .collect()
+}
+
+/// Streams the map's spectra into a spectral OpenEXR at `output`, in `precision`.
+fn write_spectral(
     plan: &Plan,
-    file: FileSettings,
+    cells: &Cells,
+    precision: &Precisions,
     output: &Path,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<WriteStats> {
+    let map = &plan.input.map;
     let names = channel_names(plan);
     let per_pixel = names.len();
     let envmap = match map.layout {
@@ -303,17 +200,18 @@ pub fn write(
         _ => None,
     };
     let (width, height) = (map.image.width, map.image.height);
+    let file = &plan.file;
     let mut writer = SpectralWriter::create(
         output,
         SpectralLayout {
             width,
             height,
             channels: ChannelSet::Custom(names),
-            precision: file.precision.precision,
+            precision: precision.precision,
             compression: file.compression,
             envmap,
-            ev: file.precision.ev,
-            attributes: file.attributes,
+            ev: precision.ev,
+            attributes: file.attributes.clone(),
             zip_level: file.zip_level,
             unscaled: vec!["sun".into()],
         },
@@ -325,13 +223,19 @@ pub fn write(
     let block_bytes = lines * width * per_pixel * std::mem::size_of::<f32>();
     let blocks = (BATCH_BYTES / block_bytes.max(1)).clamp(1, height.div_ceil(lines));
     let rows_per_block = (blocks * lines).max(16).min(height);
-    let px = Pixels { map, cells, plan };
+    let px = Pixels {
+        map,
+        cells,
+        plan: &plan.pixels,
+        mode: plan.fit.mode,
+    };
+    let bands = plan.grid.len();
     let tally = match &plan.pixels {
         PixelPlan::Basis { engine, .. } => {
-            stream_planes(&px, engine, &mut writer, rows_per_block, progress)?
+            stream_planes(&px, engine, bands, &mut writer, rows_per_block, progress)?
         }
         PixelPlan::Carriers { .. } => {
-            stream_rows(&px, &mut writer, rows_per_block, per_pixel, progress)?
+            stream_rows(&px, bands, &mut writer, rows_per_block, per_pixel, progress)?
         }
     };
     let seconds_encode = writer.encode_seconds();
@@ -345,6 +249,8 @@ pub fn write(
         roundtrip: tally.all.stats(&floor),
         roundtrip_without_sun: tally.no_sun.stats(&floor),
         roundtrip_inexact: tally.inexact.stats(&floor),
+        basis: None,
+        notes: Vec::new(),
         seconds: t1.elapsed().as_secs_f64(),
         seconds_encode,
     })
@@ -354,6 +260,7 @@ pub fn write(
 /// carrier and modulation).
 fn stream_rows(
     px: &Pixels,
+    bands: usize,
     writer: &mut SpectralWriter,
     rows_per_block: usize,
     per_pixel: usize,
@@ -370,7 +277,7 @@ fn stream_rows(
             .par_chunks_mut(width * per_pixel)
             .enumerate()
             .fold(Tally::default, |mut t, (r, row)| {
-                write_row(px, y0 + r, row, per_pixel, &mut t);
+                write_row(px, y0 + r, row, bands, per_pixel, &mut t);
                 t
             })
             .reduce(Tally::default, |mut a, b| {
@@ -391,15 +298,12 @@ fn stream_rows(
 fn stream_planes(
     px: &Pixels,
     engine: &Engine,
+    bands: usize,
     writer: &mut SpectralWriter,
     rows_per_block: usize,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Tally> {
     let (width, height) = (px.map.image.width, px.map.image.height);
-    let bands = match px.plan.format {
-        OutputFormat::Spectral => px.plan.grid.len(),
-        OutputFormat::Basis => 0,
-    };
     let new_batch = || SpectralRows::new(engine.spectra_table(), bands, 4, width, rows_per_block);
     let mut planes = [new_batch(), new_batch()];
     // Each row's tally is merged as it is done (a map's rows of luminance bins would not fit).
@@ -407,18 +311,13 @@ fn stream_planes(
     let fill = |y: usize, mut row: RowMut| {
         let mut t = Tally::default();
         // The spectrum itself is only looked at (negative values, the round trip).
-        let mut scratch = vec![0f32; px.plan.grid.len()];
+        let mut scratch = vec![0f32; bands];
         for x in 0..width {
             let rgb = px.map.image.get(x, y);
             let (kind, is_sun) = px.basis_kind(x, y);
             let r = engine.spectrum(rgb, kind, &mut scratch);
-            let extra = match px.plan.format {
-                OutputFormat::Spectral => {
-                    row.set(x, &r.combination);
-                    [rgb[0], rgb[1], rgb[2], is_sun as u8 as f32]
-                }
-                OutputFormat::Basis => engine.coefficients(rgb, is_sun).map(|c| c as f32),
-            };
+            row.set(x, &r.combination);
+            let extra = [rgb[0], rgb[1], rgb[2], is_sun as u8 as f32];
             for (e, v) in extra.into_iter().enumerate() {
                 row.set_extra(e, x, v);
             }
@@ -459,27 +358,23 @@ fn stream_planes(
 }
 
 /// One row of the output: each pixel's values, and what it took, added to `t`.
-fn write_row(px: &Pixels, y: usize, row: &mut [f32], per_pixel: usize, t: &mut Tally) {
+fn write_row(
+    px: &Pixels,
+    y: usize,
+    row: &mut [f32],
+    bands: usize,
+    per_pixel: usize,
+    t: &mut Tally,
+) {
     let width = px.map.image.width;
-    let bands = px.plan.grid.len();
-    // The basis format writes coefficients; the round trip still needs the spectrum.
-    let mut scratch = vec![0f32; bands];
     for x in 0..width {
         let rgb = px.map.image.get(x, y);
         let out = &mut row[x * per_pixel..(x + 1) * per_pixel];
-        let (w, is_sun, negative) = match px.plan.format {
-            OutputFormat::Spectral => {
-                let (spectrum, rest) = out.split_at_mut(bands);
-                let (w, is_sun) = px.spectrum(x, y, spectrum, &mut [0f32; 4]);
-                rest[..3].copy_from_slice(&rgb);
-                rest[3] = is_sun as u8 as f32;
-                (w, is_sun, carriers::is_negative(spectrum))
-            }
-            OutputFormat::Basis => {
-                let (w, is_sun) = px.spectrum(x, y, &mut scratch, out);
-                (w, is_sun, carriers::is_negative(&scratch))
-            }
-        };
+        let (spectrum, rest) = out.split_at_mut(bands);
+        let (w, is_sun) = px.spectrum(x, y, spectrum);
+        rest[..3].copy_from_slice(&rgb);
+        rest[3] = is_sun as u8 as f32;
+        let negative = carriers::is_negative(spectrum);
         measure(t, px, x, y, w, negative, is_sun);
     }
 }

@@ -1,0 +1,93 @@
+//! How pixels become spectra: the plan's per-pixel engine ([`PixelPlan`]: the paper's basis or
+//! the faithful method's carriers) and one pixel's spectrum, whichever it is ([`Pixels`]).
+
+use crate::envmap::convert::carriers::{Assign, CarrierEngine, Written};
+use crate::envmap::convert::pixel_spectra::{Engine, PixelKind, Took};
+use crate::envmap::layout::EnvMap;
+use crate::envmap::roundtrip::metric::RgbMetric;
+use crate::envmap::scene::Cells;
+use crate::fit::Mode;
+
+/// How pixels become spectra.
+#[derive(Debug, Clone)]
+pub enum PixelPlan {
+    /// The paper's modes: one fit; per analysis cell, whether it is the sun's.
+    Basis { engine: Box<Engine>, sun: Vec<bool> },
+    /// The faithful method: carriers, and per analysis cell what it is.
+    Carriers {
+        engine: Box<CarrierEngine>,
+        assign: Vec<Assign>,
+    },
+}
+
+/// One pixel's spectrum, whichever engine the plan chose.
+pub(crate) struct Pixels<'a> {
+    pub map: &'a EnvMap,
+    pub cells: &'a Cells,
+    pub plan: &'a PixelPlan,
+    /// The fit's mode (the paper's modes tell an exact pixel from a nearest one by it).
+    pub mode: Mode,
+}
+
+impl Pixels<'_> {
+    /// What a written pixel took and whether its round trip is exact. The carriers say so
+    /// themselves; the paper's basis is exact in its exact mode, for white only in the paper
+    /// mode, and where the spectrum stays non-negative in the nonneg mode, whose other pixels
+    /// get the nearest non-negative spectrum: so its pixels are exact when their round trip is.
+    pub(crate) fn exactness(&self, w: Written, de: f64) -> (Took, bool) {
+        match &self.plan {
+            PixelPlan::Carriers { .. } => (w.took, w.exact),
+            PixelPlan::Basis { .. } => {
+                let exact = de == 0.0;
+                let nearest = !exact && w.took == Took::Colorchecker && self.mode == Mode::Nonneg;
+                (if nearest { Took::Nearest } else { w.took }, exact)
+            }
+        }
+    }
+
+    pub(crate) fn metric(&self) -> &RgbMetric {
+        match &self.plan {
+            PixelPlan::Basis { engine, .. } => engine.metric(),
+            PixelPlan::Carriers { engine, .. } => engine.metric(),
+        }
+    }
+
+    /// The paper's modes: what pixel (x, y) is (the sun's, above the horizon, or plain), and
+    /// whether it is the sun's.
+    pub(crate) fn basis_kind(&self, x: usize, y: usize) -> (PixelKind, bool) {
+        let PixelPlan::Basis { sun, .. } = &self.plan else {
+            return (PixelKind::Plain, false);
+        };
+        let cell = self.cells.cell_of_pixel(self.map, x, y).unwrap_or(0);
+        if sun[cell] {
+            (PixelKind::Sun, true)
+        } else if self.map.direction(x, y).is_some_and(|d| d[1] > 0.0) {
+            (PixelKind::Sky, false)
+        } else {
+            (PixelKind::Plain, false)
+        }
+    }
+
+    /// Writes pixel (x, y)'s spectrum into `out`: what it took, and whether it is the sun's.
+    pub(crate) fn spectrum(&self, x: usize, y: usize, out: &mut [f32]) -> (Written, bool) {
+        let rgb = self.map.image.get(x, y);
+        let cell = self.cells.cell_of_pixel(self.map, x, y).unwrap_or(0);
+        match self.plan {
+            PixelPlan::Basis { engine, .. } => {
+                let kind = self.basis_kind(x, y).0;
+                let r = engine.spectrum(rgb, kind, out);
+                let w = Written {
+                    rgb_back: r.rgb_back,
+                    took: r.took,
+                    exact: true,
+                };
+                (w, kind == PixelKind::Sun && r.took == Took::Sun)
+            }
+            PixelPlan::Carriers { engine, assign } => {
+                let a = assign[cell];
+                let w = engine.spectrum(rgb, a, out);
+                (w, a.sun && w.took == Took::Sun)
+            }
+        }
+    }
+}
