@@ -200,12 +200,49 @@ pub fn select_reporting(
     opts: &Options,
     report: super::progress::Report,
 ) -> Result<Selection> {
+    check_request(family, opts)?;
+    let (fit_set, held) = estimators(scene)?;
+    report(&super::progress::Stage::UniformGrids {
+        stimuli: scene.fit.len() + scene.held_out.len(),
+    });
+    let uniform = cheapest_uniform(&fit_set, held.as_ref(), opts.target())?;
+    let fitted = match family {
+        Family::Scene => Some(fit::fit_reporting(&fit_set, held.as_ref(), opts, report)?),
+        Family::Uniform => None,
+    };
+    let chosen = pick(fitted.as_ref(), &uniform, opts).chosen(fitted.as_ref(), &uniform, opts);
+    Ok(Selection {
+        kind: chosen.quadrature.kind(),
+        quadrature: chosen.quadrature,
+        family,
+        tolerance_de2000: opts.tolerance,
+        target_de2000: opts.target(),
+        budget: opts.budget,
+        estimate_de2000: chosen.estimate_de2000,
+        met: chosen.met,
+        reason: chosen.reason,
+        scene: fitted,
+        uniform,
+        image: None,
+        seconds: 0.0,
+        stages: Vec::new(),
+        from_cache: None,
+    })
+}
+
+/// An error for a tolerance out of range, or a budget of nodes with uniform grids only.
+fn check_request(family: Family, opts: &Options) -> Result<()> {
     fit::check_tolerance(opts.tolerance)?;
     if family == Family::Uniform && opts.budget.is_some() {
         return Err(Error::invalid(
             "a budget of nodes applies to the scene's quadrature, not to uniform grids",
         ));
     }
+    Ok(())
+}
+
+/// The estimators of the scene's fit stimuli and, if it has any, of its held-out ones.
+fn estimators(scene: &Scene) -> Result<(Estimator, Option<Estimator>)> {
     let est = |s: &[Stimulus]| {
         Estimator::new(s, scene.observer, scene.start_nm, scene.end_nm, scene.white)
     };
@@ -215,23 +252,85 @@ pub fn select_reporting(
     } else {
         Some(est(scene.held_out)?)
     };
-    report(&super::progress::Stage::UniformGrids {
-        stimuli: scene.fit.len() + scene.held_out.len(),
-    });
-    let uniform = cheapest_uniform(&fit_set, held.as_ref(), opts.target())?;
-    let fitted = match family {
-        Family::Scene => Some(fit::fit_reporting(&fit_set, held.as_ref(), opts, report)?),
-        Family::Uniform => None,
-    };
-    // A uniform grid beyond the budget is not chosen, however well it does.
+    Ok((fit_set, held))
+}
+
+/// Which quadrature [`select_reporting`] takes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Pick {
+    /// The scene fit meets the target, with no more nodes than a uniform grid that does.
+    SceneMeets,
+    /// Nothing within the budget meets the target, and the scene fit errs least.
+    SceneErrsLeast,
+    /// A uniform grid: as cheap as a scene fit that meets the target, or better than one that
+    /// misses it.
+    UniformOverScene,
+    /// Uniform grids only were asked for.
+    UniformAsked,
+}
+
+/// The choice between the scene fit (None: not asked for) and the cheapest uniform grid. A
+/// uniform grid beyond the budget is not chosen, however well it does.
+fn pick(fitted: Option<&fit::Choice>, uniform: &UniformChoice, opts: &Options) -> Pick {
     let within = opts.within_budget(uniform.samples);
     let uniform_meets = uniform.met && within;
-    let (quadrature, estimate_de2000, met, reason) = match &fitted {
-        Some(f) if f.met && (!uniform_meets || f.quadrature.len() <= uniform.samples) => (
-            f.quadrature.clone(),
-            f.estimate_de2000,
-            true,
-            format!(
+    match fitted {
+        Some(f) if f.met && (!uniform_meets || f.quadrature.len() <= uniform.samples) => {
+            Pick::SceneMeets
+        }
+        Some(f)
+            if !(f.met || uniform_meets)
+                && (!within || f.estimate_de2000 < uniform.estimate_de2000) =>
+        {
+            Pick::SceneErrsLeast
+        }
+        Some(_) => Pick::UniformOverScene,
+        None => Pick::UniformAsked,
+    }
+}
+
+/// The quadrature picked, its estimate, whether it meets the target, and why it was picked.
+struct Chosen {
+    quadrature: Quadrature,
+    estimate_de2000: f64,
+    met: bool,
+    reason: String,
+}
+
+impl Pick {
+    /// The quadrature this pick names, with the reason in words.
+    fn chosen(
+        self,
+        fitted: Option<&fit::Choice>,
+        uniform: &UniformChoice,
+        opts: &Options,
+    ) -> Chosen {
+        let reason = self.reason(fitted, uniform, opts);
+        match (self, fitted) {
+            (Pick::SceneMeets | Pick::SceneErrsLeast, Some(f)) => Chosen {
+                quadrature: f.quadrature.clone(),
+                estimate_de2000: f.estimate_de2000,
+                met: self == Pick::SceneMeets,
+                reason,
+            },
+            _ => Chosen {
+                quadrature: uniform.quadrature.clone(),
+                estimate_de2000: uniform.estimate_de2000,
+                met: uniform.met,
+                reason,
+            },
+        }
+    }
+
+    /// Why this pick, in words.
+    fn reason(
+        self,
+        fitted: Option<&fit::Choice>,
+        uniform: &UniformChoice,
+        opts: &Options,
+    ) -> String {
+        match (self, fitted) {
+            (Pick::SceneMeets, Some(f)) => format!(
                 "{} the target; the cheapest uniform grid that does has {}",
                 super::nodes_verb(f.quadrature.len(), "meet"),
                 if uniform.met {
@@ -240,61 +339,21 @@ pub fn select_reporting(
                     "none".into()
                 }
             ),
-        ),
-        Some(f)
-            if !(f.met || uniform_meets)
-                && (!within || f.estimate_de2000 < uniform.estimate_de2000) =>
-        {
-            (
-                f.quadrature.clone(),
-                f.estimate_de2000,
-                false,
-                match opts.budget {
-                    Some(b) => format!(
-                        "no quadrature of at most {b} nodes meets the target; of those, the \
-                         scene fit errs least"
-                    ),
-                    None => "nothing meets the target; the scene fit errs least".into(),
-                },
-            )
-        }
-        Some(f) => (
-            uniform.quadrature.clone(),
-            uniform.estimate_de2000,
-            uniform.met,
-            if f.met {
-                "the uniform grid is as cheap".into()
-            } else {
-                format!(
-                    "the scene fit misses the target with {} nodes",
-                    f.quadrature.len()
-                )
+            (Pick::SceneErrsLeast, _) => match opts.budget {
+                Some(b) => format!(
+                    "no quadrature of at most {b} nodes meets the target; of those, the \
+                     scene fit errs least"
+                ),
+                None => "nothing meets the target; the scene fit errs least".into(),
             },
-        ),
-        None => (
-            uniform.quadrature.clone(),
-            uniform.estimate_de2000,
-            uniform.met,
-            "--quadrature uniform".into(),
-        ),
-    };
-    Ok(Selection {
-        kind: quadrature.kind(),
-        quadrature,
-        family,
-        tolerance_de2000: opts.tolerance,
-        target_de2000: opts.target(),
-        budget: opts.budget,
-        estimate_de2000,
-        met,
-        reason,
-        scene: fitted,
-        uniform,
-        image: None,
-        seconds: 0.0,
-        stages: Vec::new(),
-        from_cache: None,
-    })
+            (Pick::UniformOverScene, Some(f)) if f.met => "the uniform grid is as cheap".into(),
+            (Pick::UniformOverScene, Some(f)) => format!(
+                "the scene fit misses the target with {} nodes",
+                f.quadrature.len()
+            ),
+            _ => "--quadrature uniform".into(),
+        }
+    }
 }
 
 /// The stimuli `color --tolerance` fits a quadrature to: the colour asked for, its light seen

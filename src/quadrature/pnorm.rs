@@ -91,7 +91,16 @@ impl Problem<'_> {
     /// derivative in block `c` is `e_c a' - [c = Y] xyz b'`, and the Hessian's blocks are sums
     /// of `a a'`, `a b'` and `b b'` with per-row coefficients: eleven weighted Gram products.
     fn newton_step(&self, cols: &[usize], x: &DVector<f64>, p: f64) -> Option<DVector<f64>> {
-        let n = cols.len();
+        let at = self.linearise(cols, x, p / 2.0)?;
+        let (a, b) = self.jacobian_factors(cols, &at.steps);
+        let k = self.row_coefficients(&at);
+        let (h, g) = assemble(&a, &b, &k, cols.len());
+        self.line_search(cols, x, &at, &h, &g)
+    }
+
+    /// Every row's colour step at `x`, its quadratic error `q_r` and their largest `s`; `None`
+    /// when a light has no Y on the nodes or no row errs.
+    fn linearise(&self, cols: &[usize], x: &DVector<f64>, half: f64) -> Option<Linearised> {
         let rows = self.row_count();
         let steps: Vec<Step> = (0..rows)
             .map(|r| self.colour_step(r, cols, x))
@@ -101,7 +110,13 @@ impl Problem<'_> {
         if !(s.is_finite() && s > 0.0) {
             return None;
         }
-        let half = p / 2.0;
+        Some(Linearised { steps, qs, s, half })
+    }
+
+    /// The rows' spectra on the nodes divided by their light's Y (`a`) and by its square (`b`):
+    /// how the relative colour moves with the weights.
+    fn jacobian_factors(&self, cols: &[usize], steps: &[Step]) -> (DMatrix<f64>, DMatrix<f64>) {
+        let rows = self.row_count();
         let per_row = |f: &dyn Fn(&Step) -> f64| DVector::from_fn(rows, |r, _| f(&steps[r]));
         let a = scale_rows(
             self.gather(cols, Spectra::Values),
@@ -111,68 +126,40 @@ impl Problem<'_> {
             self.gather(cols, Spectra::Light),
             &per_row(&|s| 100.0 / (s.y * s.y)),
         );
-        // Per row: the coefficients of a a' in block (c, d), of a b' in (c, Y), of b b' in
-        // (Y, Y), and of a and b in the gradient's block c.
-        let zeros = || DVector::<f64>::zeros(rows);
-        let mut kaa: [[DVector<f64>; 3]; 3] =
-            std::array::from_fn(|_| std::array::from_fn(|_| zeros()));
-        let mut kab: [DVector<f64>; 3] = std::array::from_fn(|_| zeros());
-        let mut kbb = zeros();
-        let mut ga: [DVector<f64>; 3] = std::array::from_fn(|_| zeros());
-        let mut gb = zeros();
+        (a, b)
+    }
+
+    /// Per row: the coefficients of `a a'` in block (c, d), of `a b'` in (c, Y), of `b b'` in
+    /// (Y, Y), and of `a` and `b` in the gradient's block c.
+    fn row_coefficients(&self, at: &Linearised) -> Coefficients {
+        let rows = self.row_count();
+        let mut k = Coefficients::zeros(rows);
+        let (s, half) = (at.s, at.half);
         for r in 0..rows {
-            let t = qs[r] / s;
+            let t = at.qs[r] / s;
             if t < 1e-12 {
                 continue;
             }
             // f = t^half: df/dq and d2f/dq2.
             let f1 = half * t.powf(half - 1.0) / s;
             let f2 = half * (half - 1.0) * t.powf(half - 2.0) / (s * s);
-            let q = self.row_metric(r);
-            let xyz = steps[r].xyz;
-            let qv = |v: &[f64; 3]| -> [f64; 3] {
-                std::array::from_fn(|c| (0..3).map(|k| q[c][k] * v[k]).sum())
-            };
-            let (alpha, qx) = (qv(&steps[r].d), qv(&xyz));
-            let beta: f64 = (0..3).map(|c| xyz[c] * alpha[c]).sum();
-            let xqx: f64 = (0..3).map(|c| xyz[c] * qx[c]).sum();
-            // grad q = 2 J' Q d; Hessian 2 f1 J'QJ (Gauss-Newton) + f2 grad q grad q'.
-            for c in 0..3 {
-                for d in 0..3 {
-                    kaa[c][d][r] = 2.0 * f1 * q[c][d] + 4.0 * f2 * alpha[c] * alpha[d];
-                }
-                kab[c][r] = -2.0 * f1 * qx[c] - 4.0 * f2 * alpha[c] * beta;
-                ga[c][r] = 2.0 * f1 * alpha[c];
-            }
-            kbb[r] = 2.0 * f1 * xqx + 4.0 * f2 * beta * beta;
-            gb[r] = -2.0 * f1 * beta;
+            k.set_row(r, self.row_metric(r), &at.steps[r], [f1, f2]);
         }
-        let mut h = DMatrix::<f64>::zeros(3 * n, 3 * n);
-        let mut g = DVector::<f64>::zeros(3 * n);
-        for c in 0..3 {
-            for d in c..3 {
-                let mut block = symmetric_gram(&a, &kaa[c][d]);
-                if d == 1 {
-                    block += weighted_gram(&a, &kab[c], &b);
-                }
-                if c == 1 {
-                    block += weighted_gram(&b, &kab[d], &a);
-                }
-                if c == 1 && d == 1 {
-                    block += symmetric_gram(&b, &kbb);
-                }
-                h.view_mut((c * n, d * n), (n, n)).copy_from(&block);
-                if c != d {
-                    h.view_mut((d * n, c * n), (n, n))
-                        .copy_from(&block.transpose());
-                }
-            }
-            let mut gc = a.tr_mul(&ga[c]);
-            if c == 1 {
-                gc += b.tr_mul(&gb);
-            }
-            g.rows_mut(c * n, n).copy_from(&gc);
-        }
+        k
+    }
+
+    /// The Newton step from the Hessian `h` and gradient `g`, damped by the smallest of three
+    /// levels whose Cholesky factor exists, halved until the objective falls enough (Armijo).
+    fn line_search(
+        &self,
+        cols: &[usize],
+        x: &DVector<f64>,
+        at: &Linearised,
+        h: &DMatrix<f64>,
+        g: &DVector<f64>,
+    ) -> Option<DVector<f64>> {
+        let (s, half) = (at.s, at.half);
+        let rows = self.row_count();
         let objective = |x: &DVector<f64>| -> f64 {
             (0..rows)
                 .map(|r| match self.colour_step(r, cols, x) {
@@ -181,17 +168,18 @@ impl Problem<'_> {
                 })
                 .sum()
         };
-        let trace = h.trace() / (3 * n) as f64;
-        let f0: f64 = qs.iter().map(|q| (q / s).powf(half)).sum();
+        let dim = 3 * cols.len();
+        let trace = h.trace() / dim as f64;
+        let f0: f64 = at.qs.iter().map(|q| (q / s).powf(half)).sum();
         for damping in [1e-9, 1e-6, 1e-3] {
             let mut hd = h.clone();
-            for k in 0..3 * n {
+            for k in 0..dim {
                 hd[(k, k)] += damping * trace + 1e-300;
             }
             let Some(ch) = hd.cholesky() else {
                 continue;
             };
-            let step = ch.solve(&(-&g));
+            let step = ch.solve(&(-g));
             let slope = g.dot(&step);
             let mut alpha = 1.0;
             for _ in 0..HALVINGS {
@@ -236,6 +224,98 @@ impl Problem<'_> {
             .sum::<f64>()
             .max(0.0)
     }
+}
+
+/// The rows at one iterate: their colour steps, quadratic errors `q_r`, the largest `s`, and
+/// half the level's exponent.
+struct Linearised {
+    steps: Vec<Step>,
+    qs: Vec<f64>,
+    s: f64,
+    half: f64,
+}
+
+/// The per-row coefficients of the Hessian's Gram products and of the gradient (see
+/// [`Problem::row_coefficients`]).
+struct Coefficients {
+    kaa: [[DVector<f64>; 3]; 3],
+    kab: [DVector<f64>; 3],
+    kbb: DVector<f64>,
+    ga: [DVector<f64>; 3],
+    gb: DVector<f64>,
+}
+
+impl Coefficients {
+    /// Every coefficient 0 for `rows` rows.
+    fn zeros(rows: usize) -> Coefficients {
+        let zeros = || DVector::<f64>::zeros(rows);
+        Coefficients {
+            kaa: std::array::from_fn(|_| std::array::from_fn(|_| zeros())),
+            kab: std::array::from_fn(|_| zeros()),
+            kbb: zeros(),
+            ga: std::array::from_fn(|_| zeros()),
+            gb: zeros(),
+        }
+    }
+
+    /// Row `r`'s coefficients from its metric `q`, its step and `[f1, f2]`, the first and second
+    /// derivatives of its term in `q_r`: grad q = 2 J' Q d; Hessian 2 f1 J'QJ (Gauss-Newton) +
+    /// f2 grad q grad q'.
+    fn set_row(&mut self, r: usize, q: &[[f64; 3]; 3], step: &Step, [f1, f2]: [f64; 2]) {
+        let xyz = step.xyz;
+        let qv = |v: &[f64; 3]| -> [f64; 3] {
+            std::array::from_fn(|c| (0..3).map(|k| q[c][k] * v[k]).sum())
+        };
+        let (alpha, qx) = (qv(&step.d), qv(&xyz));
+        let beta: f64 = (0..3).map(|c| xyz[c] * alpha[c]).sum();
+        let xqx: f64 = (0..3).map(|c| xyz[c] * qx[c]).sum();
+        for c in 0..3 {
+            for d in 0..3 {
+                self.kaa[c][d][r] = 2.0 * f1 * q[c][d] + 4.0 * f2 * alpha[c] * alpha[d];
+            }
+            self.kab[c][r] = -2.0 * f1 * qx[c] - 4.0 * f2 * alpha[c] * beta;
+            self.ga[c][r] = 2.0 * f1 * alpha[c];
+        }
+        self.kbb[r] = 2.0 * f1 * xqx + 4.0 * f2 * beta * beta;
+        self.gb[r] = -2.0 * f1 * beta;
+    }
+}
+
+/// The Hessian (3n x 3n, channel-major blocks) and gradient from the Jacobian factors `a`, `b`
+/// and the per-row coefficients `k`.
+fn assemble(
+    a: &DMatrix<f64>,
+    b: &DMatrix<f64>,
+    k: &Coefficients,
+    n: usize,
+) -> (DMatrix<f64>, DVector<f64>) {
+    let mut h = DMatrix::<f64>::zeros(3 * n, 3 * n);
+    let mut g = DVector::<f64>::zeros(3 * n);
+    for c in 0..3 {
+        for d in c..3 {
+            let mut block = symmetric_gram(a, &k.kaa[c][d]);
+            if d == 1 {
+                block += weighted_gram(a, &k.kab[c], b);
+            }
+            if c == 1 {
+                block += weighted_gram(b, &k.kab[d], a);
+            }
+            if c == 1 && d == 1 {
+                block += symmetric_gram(b, &k.kbb);
+            }
+            h.view_mut((c * n, d * n), (n, n)).copy_from(&block);
+            if c != d {
+                h.view_mut((d * n, c * n), (n, n))
+                    .copy_from(&block.transpose());
+            }
+        }
+        let mut gc = a.tr_mul(&k.ga[c]);
+        if c == 1 {
+            gc += b.tr_mul(&k.gb);
+        }
+        g.rows_mut(c * n, n).copy_from(&gc);
+    }
+    (h, g)
 }
 
 fn weights_of(x: &DVector<f64>, n: usize) -> Weights {
