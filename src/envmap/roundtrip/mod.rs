@@ -6,7 +6,7 @@ pub mod metric;
 pub mod stats;
 
 use crate::colorimetry::{Chromaticities, Observer, RgbSpace};
-use crate::envmap::files::{read_spectral_rows, AttrValue, EnvmapAttr};
+use crate::envmap::files::{read_spectral_rows, AttrValue, EnvmapAttr, SpectralInfo};
 use crate::envmap::layout::{detect, EnvMap, Layout};
 use crate::envmap::roundtrip::metric::RgbMetric;
 use crate::envmap::roundtrip::stats::{Floor, RoundTripAccumulator, RoundTripStats};
@@ -66,150 +66,30 @@ pub fn round_trip_file(
     path: &Path,
     observer: Observer,
     rule: Rule,
-    mut heatmap: Option<&mut Vec<f32>>,
+    heatmap: Option<&mut Vec<f32>>,
 ) -> Result<FileRoundTrip> {
-    // The header once: size, the checked wavelengths (positive, each once, sorted) and the
-    // attributes; the pixels follow in read_spectral_rows.
-    let header = crate::envmap::files::read_spectral_info(path)?;
+    let header = checked_header(path)?;
     let wavelengths = header.wavelengths_nm.clone();
-    if wavelengths.len() < 2 {
-        return Err(Error::invalid(format!(
-            "{}: a round trip needs at least two S0.<wavelength>nm channels",
-            path.display()
-        )));
-    }
     let (width, height) = (header.width, header.height);
-    // CMFs at the file's wavelengths, with the rule's weights (non-uniform grids: trapezoid).
-    let cmf_table = crate::data::Table::builtin(observer.table_name())?;
-    let at = |col: &str| -> Result<Vec<f64>> {
-        let t: Tabulated = cmf_table.column(col)?;
-        let (lo, hi) = t.range_nm();
-        wavelengths
-            .iter()
-            .map(|&w| {
-                // The observer sees nothing outside its tables (as `Cmfs::new`).
-                if !(lo..=hi).contains(&w) {
-                    return Ok(0.0);
-                }
-                let g = WavelengthGrid::new(w, w, 1.0)?;
-                Ok(t.resample(&g, Interpolation::SMOOTH).values()[0])
-            })
-            .collect()
-    };
-    let (xb, yb, zb) = (at("x")?, at("y")?, at("z")?);
-    let weights: Vec<f64> = match Tabulated::new(wavelengths.clone(), vec![0.0; wavelengths.len()])?
-        .uniform_step_nm()
-    {
-        Some(step) => rule.weights(wavelengths.len(), step),
-        None => {
-            // Trapezoid weights on a non-uniform grid.
-            let n = wavelengths.len();
-            (0..n)
-                .map(|i| {
-                    let l = if i > 0 {
-                        wavelengths[i] - wavelengths[i - 1]
-                    } else {
-                        0.0
-                    };
-                    let r = if i + 1 < n {
-                        wavelengths[i + 1] - wavelengths[i]
-                    } else {
-                        0.0
-                    };
-                    (l + r) / 2.0
-                })
-                .collect()
-        }
-    };
-    let y_norm: f64 = yb.iter().zip(&weights).map(|(y, w)| y * w).sum();
-    let mut named = None;
-    let mut white_balance = None;
-    for (name, value) in &header.attributes {
-        match (name.as_str(), value) {
-            ("specmap.space", AttrValue::Text(t)) => {
-                named = RgbSpace::ALL.into_iter().find(|s| s.name == *t);
-            }
-            ("specmap.lightRGB", AttrValue::F32Vec(v)) if v.len() == 3 => {
-                white_balance = Some([v[0] as f64, v[1] as f64, v[2] as f64]);
-            }
-            _ => {}
-        }
-    }
+    let integration = Integration::new(&wavelengths, observer, rule)?;
+    let (named, white_balance) = preview_attributes(&header.attributes);
     let space = preview_space(path, named, header.chromaticities)?;
-    let m = space.from_xyz_matrix();
-    let metric = RgbMetric::new(&space);
-    let envmap = header.envmap.map(|e| match e {
-        EnvmapAttr::LatLong => Layout::LatLong,
-        EnvmapAttr::Cube => Layout::Cube,
-    });
-    let layout = detect(width, height, envmap).ok();
-    let solid = layout.and_then(|l| EnvMap::new(l, RgbImage::new(width, height)).ok());
-    let sun = crate::envmap::files::read_stored_channel(path, "sun");
+    let layout = detect(width, height, header.envmap.map(layout_of)).ok();
+    let comparison = Comparison {
+        back: BackToRgb {
+            integration,
+            m: space.from_xyz_matrix(),
+            white_balance,
+        },
+        metric: RgbMetric::new(&space),
+        solid: layout.and_then(|l| EnvMap::new(l, RgbImage::new(width, height)).ok()),
+        sun: crate::envmap::files::read_stored_channel(path, "sun"),
+        width,
+        bands: wavelengths.len(),
+    };
+    let tally = compare_file(path, &comparison, heatmap, width * height)?;
+    let floor = tally.all.floor();
     let bands = wavelengths.len();
-    let (mut all, mut no_sun) = (
-        RoundTripAccumulator::default(),
-        RoundTripAccumulator::default(),
-    );
-    let mut sun_pixels = 0;
-    let mut non_finite_pixels = 0;
-    let mut missing_rgb = false;
-    if let Some(h) = heatmap.as_deref_mut() {
-        h.clear();
-        h.resize(width * height, f32::NAN);
-    }
-    let info = read_spectral_rows(path, |y, row| {
-        let per = row.len() / width.max(1);
-        if per < bands + 3 {
-            missing_rgb = true;
-            return;
-        }
-        for x in 0..width {
-            let p = &row[x * per..(x + 1) * per];
-            let (mut xx, mut yy, mut zz) = (0.0, 0.0, 0.0);
-            for i in 0..bands {
-                let v = p[i] as f64 * weights[i];
-                xx += v * xb[i];
-                yy += v * yb[i];
-                zz += v * zb[i];
-            }
-            let xyz = nalgebra::Vector3::new(xx, yy, zz) / y_norm;
-            let mut back: [f64; 3] = (m * xyz).into();
-            if let Some(t) = white_balance {
-                for k in 0..3 {
-                    back[k] /= t[k];
-                }
-            }
-            let input = [p[bands], p[bands + 1], p[bands + 2]];
-            if !(back.iter().all(|v| v.is_finite()) && input.iter().all(|v| v.is_finite())) {
-                non_finite_pixels += 1;
-                continue;
-            }
-            let lum = metric.luminance(input);
-            let de = if lum > 0.0 {
-                metric.round_trip_error(input, back)
-            } else {
-                0.0
-            };
-            let omega = solid.as_ref().map(|s| s.solid_angle(x, y)).unwrap_or(1.0);
-            let i = y * width + x;
-            all.add(x, y, lum, omega, de);
-            if sun.as_ref().is_some_and(|s| s[i] > 0.5) {
-                sun_pixels += 1;
-            } else {
-                no_sun.add(x, y, lum, omega, de);
-            }
-            if let Some(h) = heatmap.as_deref_mut().filter(|_| lum > 0.0 && omega > 0.0) {
-                h[i] = de as f32;
-            }
-        }
-    })?;
-    if missing_rgb || !info.has_rgb {
-        return Err(Error::invalid(format!(
-            "{}: the file has no R, G, B channels to compare the spectra with",
-            path.display()
-        )));
-    }
-    let floor = all.floor();
     Ok(FileRoundTrip {
         file: path.display().to_string(),
         width,
@@ -221,9 +101,262 @@ pub fn round_trip_file(
         chromaticities: space.chromaticities(),
         white_balance,
         floor,
-        all: all.stats(&floor),
-        without_sun: no_sun.stats(&floor),
-        sun_pixels,
-        non_finite_pixels,
+        all: tally.all.stats(&floor),
+        without_sun: tally.no_sun.stats(&floor),
+        sun_pixels: tally.sun_pixels,
+        non_finite_pixels: tally.non_finite_pixels,
     })
+}
+
+/// The header once: size, the checked wavelengths (positive, each once, sorted) and the
+/// attributes; the pixels follow in read_spectral_rows. A round trip needs two bands at least.
+fn checked_header(path: &Path) -> Result<SpectralInfo> {
+    let header = crate::envmap::files::read_spectral_info(path)?;
+    if header.wavelengths_nm.len() < 2 {
+        return Err(Error::invalid(format!(
+            "{}: a round trip needs at least two S0.<wavelength>nm channels",
+            path.display()
+        )));
+    }
+    Ok(header)
+}
+
+/// The layout an `envmap` attribute names.
+fn layout_of(attribute: EnvmapAttr) -> Layout {
+    match attribute {
+        EnvmapAttr::LatLong => Layout::LatLong,
+        EnvmapAttr::Cube => Layout::Cube,
+    }
+}
+
+/// The space `specmap.space` names and the white balance `specmap.lightRGB` holds, if present.
+fn preview_attributes(attributes: &[(String, AttrValue)]) -> (Option<RgbSpace>, Option<[f64; 3]>) {
+    let mut named = None;
+    let mut white_balance = None;
+    for (name, value) in attributes {
+        match (name.as_str(), value) {
+            ("specmap.space", AttrValue::Text(t)) => {
+                named = RgbSpace::ALL.into_iter().find(|s| s.name == *t);
+            }
+            ("specmap.lightRGB", AttrValue::F32Vec(v)) if v.len() == 3 => {
+                white_balance = Some([v[0] as f64, v[1] as f64, v[2] as f64]);
+            }
+            _ => {}
+        }
+    }
+    (named, white_balance)
+}
+
+/// The colour matching functions at a file's wavelengths and the quadrature weights of its
+/// bands.
+struct Integration {
+    xb: Vec<f64>,
+    yb: Vec<f64>,
+    zb: Vec<f64>,
+    weights: Vec<f64>,
+    /// The Y of a flat spectrum of 1: the normalisation of the integrals.
+    y_norm: f64,
+}
+
+impl Integration {
+    /// CMFs at the file's wavelengths, with the rule's weights (non-uniform grids: trapezoid).
+    fn new(wavelengths: &[f64], observer: Observer, rule: Rule) -> Result<Integration> {
+        let cmf_table = crate::data::Table::builtin(observer.table_name())?;
+        let (xb, yb, zb) = (
+            cmf_at(&cmf_table, "x", wavelengths)?,
+            cmf_at(&cmf_table, "y", wavelengths)?,
+            cmf_at(&cmf_table, "z", wavelengths)?,
+        );
+        let weights = band_weights(wavelengths, rule)?;
+        let y_norm: f64 = yb.iter().zip(&weights).map(|(y, w)| y * w).sum();
+        Ok(Integration {
+            xb,
+            yb,
+            zb,
+            weights,
+            y_norm,
+        })
+    }
+
+    /// The XYZ of a pixel's bands (the first `weights.len()` values of `p`).
+    fn xyz(&self, p: &[f32]) -> nalgebra::Vector3<f64> {
+        let (mut xx, mut yy, mut zz) = (0.0, 0.0, 0.0);
+        for i in 0..self.weights.len() {
+            let v = p[i] as f64 * self.weights[i];
+            xx += v * self.xb[i];
+            yy += v * self.yb[i];
+            zz += v * self.zb[i];
+        }
+        nalgebra::Vector3::new(xx, yy, zz) / self.y_norm
+    }
+}
+
+/// One colour matching function (`col` of the observer's table) at `wavelengths`.
+fn cmf_at(cmf_table: &crate::data::Table, col: &str, wavelengths: &[f64]) -> Result<Vec<f64>> {
+    let t: Tabulated = cmf_table.column(col)?;
+    let (lo, hi) = t.range_nm();
+    wavelengths
+        .iter()
+        .map(|&w| {
+            // The observer sees nothing outside its tables (as `Cmfs::new`).
+            if !(lo..=hi).contains(&w) {
+                return Ok(0.0);
+            }
+            let g = WavelengthGrid::new(w, w, 1.0)?;
+            Ok(t.resample(&g, Interpolation::SMOOTH).values()[0])
+        })
+        .collect()
+}
+
+/// The rule's weights on a uniform grid, trapezoid weights on a non-uniform one.
+fn band_weights(wavelengths: &[f64], rule: Rule) -> Result<Vec<f64>> {
+    Ok(
+        match Tabulated::new(wavelengths.to_vec(), vec![0.0; wavelengths.len()])?.uniform_step_nm()
+        {
+            Some(step) => rule.weights(wavelengths.len(), step),
+            None => trapezoid_weights(wavelengths),
+        },
+    )
+}
+
+/// Trapezoid weights on a non-uniform grid.
+fn trapezoid_weights(wavelengths: &[f64]) -> Vec<f64> {
+    let n = wavelengths.len();
+    (0..n)
+        .map(|i| {
+            let l = if i > 0 {
+                wavelengths[i] - wavelengths[i - 1]
+            } else {
+                0.0
+            };
+            let r = if i + 1 < n {
+                wavelengths[i + 1] - wavelengths[i]
+            } else {
+                0.0
+            };
+            (l + r) / 2.0
+        })
+        .collect()
+}
+
+/// Spectra back to the preview's RGB: integrated, to the space, divided by the white balance.
+struct BackToRgb {
+    integration: Integration,
+    m: nalgebra::Matrix3<f64>,
+    white_balance: Option<[f64; 3]>,
+}
+
+impl BackToRgb {
+    /// The RGB of a pixel's bands.
+    fn rgb(&self, p: &[f32]) -> [f64; 3] {
+        let xyz = self.integration.xyz(p);
+        let mut back: [f64; 3] = (self.m * xyz).into();
+        if let Some(t) = self.white_balance {
+            for k in 0..3 {
+                back[k] /= t[k];
+            }
+        }
+        back
+    }
+}
+
+/// What a pixel's comparison needs: the way back to RGB, the metric, the solid angles (None
+/// for an unknown layout) and the `sun` channel (None when the file has none).
+struct Comparison {
+    back: BackToRgb,
+    metric: RgbMetric,
+    solid: Option<EnvMap>,
+    sun: Option<Vec<f32>>,
+    width: usize,
+    bands: usize,
+}
+
+/// What the comparison gathers while the rows stream by.
+struct Tally<'a> {
+    all: RoundTripAccumulator,
+    no_sun: RoundTripAccumulator,
+    sun_pixels: usize,
+    non_finite_pixels: usize,
+    /// A row had fewer values per pixel than the bands and R, G, B.
+    missing_rgb: bool,
+    heatmap: Option<&'a mut Vec<f32>>,
+}
+
+/// Streams the file's rows through the comparison; an error when it has no R, G, B.
+fn compare_file<'a>(
+    path: &Path,
+    comparison: &Comparison,
+    mut heatmap: Option<&'a mut Vec<f32>>,
+    pixels: usize,
+) -> Result<Tally<'a>> {
+    if let Some(h) = heatmap.as_deref_mut() {
+        h.clear();
+        h.resize(pixels, f32::NAN);
+    }
+    let mut tally = Tally {
+        all: RoundTripAccumulator::default(),
+        no_sun: RoundTripAccumulator::default(),
+        sun_pixels: 0,
+        non_finite_pixels: 0,
+        missing_rgb: false,
+        heatmap,
+    };
+    let info = read_spectral_rows(path, |y, row| comparison.row(y, row, &mut tally))?;
+    if tally.missing_rgb || !info.has_rgb {
+        return Err(Error::invalid(format!(
+            "{}: the file has no R, G, B channels to compare the spectra with",
+            path.display()
+        )));
+    }
+    Ok(tally)
+}
+
+impl Comparison {
+    /// Compares the pixels of row `y` (bands then R, G, B per pixel).
+    fn row(&self, y: usize, row: &[f32], tally: &mut Tally) {
+        let per = row.len() / self.width.max(1);
+        if per < self.bands + 3 {
+            tally.missing_rgb = true;
+            return;
+        }
+        for x in 0..self.width {
+            self.pixel(x, y, &row[x * per..(x + 1) * per], tally);
+        }
+    }
+
+    /// Compares pixel (x, y): its bands back to RGB against its R, G, B.
+    fn pixel(&self, x: usize, y: usize, p: &[f32], tally: &mut Tally) {
+        let bands = self.bands;
+        let back = self.back.rgb(p);
+        let input = [p[bands], p[bands + 1], p[bands + 2]];
+        if !(back.iter().all(|v| v.is_finite()) && input.iter().all(|v| v.is_finite())) {
+            tally.non_finite_pixels += 1;
+            return;
+        }
+        let lum = self.metric.luminance(input);
+        let de = if lum > 0.0 {
+            self.metric.round_trip_error(input, back)
+        } else {
+            0.0
+        };
+        let omega = self
+            .solid
+            .as_ref()
+            .map(|s| s.solid_angle(x, y))
+            .unwrap_or(1.0);
+        let i = y * self.width + x;
+        tally.all.add(x, y, lum, omega, de);
+        if self.sun.as_ref().is_some_and(|s| s[i] > 0.5) {
+            tally.sun_pixels += 1;
+        } else {
+            tally.no_sun.add(x, y, lum, omega, de);
+        }
+        if let Some(h) = tally
+            .heatmap
+            .as_deref_mut()
+            .filter(|_| lum > 0.0 && omega > 0.0)
+        {
+            h[i] = de as f32;
+        }
+    }
 }
