@@ -3,8 +3,8 @@
 
 use super::env;
 use super::prepare::{
-    CpuFilm, GpuObject, Prepared, CYLINDER_X, HAS_DIFFUSE, HAS_FILM, HIDE_BACKGROUND, QUAD, SPHERE,
-    TRANSPARENT,
+    CpuFilm, GpuLighting, GpuObject, Prepared, CYLINDER_X, HAS_DIFFUSE, HAS_FILM, HIDE_BACKGROUND,
+    QUAD, SPHERE, TRANSPARENT,
 };
 use super::Image;
 use crate::thinfilm::{Film, Incidence, Polarization};
@@ -12,6 +12,16 @@ use rayon::prelude::*;
 use std::f64::consts::{FRAC_1_PI, PI};
 
 /// Renders the prepared scene.
+///
+/// ```
+/// use specmap::render::{cpu, prepare::Prepared, Preset, Spectral};
+///
+/// let scene = Preset::Chart.scene(48, 32, "D65", None)?;
+/// let image = cpu::render(&Prepared::new(&scene, &Spectral::step(10.0)?)?);
+/// let [r, g, b] = image.get(24, 16);
+/// assert!(r.is_finite() && g.is_finite() && b.is_finite());
+/// # Ok::<(), specmap::error::Error>(())
+/// ```
 pub fn render(p: &Prepared) -> Image {
     let (w, h) = (p.params.width as usize, p.params.height as usize);
     let mut pixels = vec![[0f32; 3]; w * h];
@@ -309,7 +319,9 @@ fn ramp_scale(o: &GpuObject, px: f64) -> Option<f64> {
     })
 }
 
-/// The radiance of pixel (x, y) at each node `i`, handed to `add(i, radiance)`.
+/// The radiance of pixel (x, y) at each node `i`, handed to `add(i, radiance)`: the
+/// environment where the ray misses (nothing where the background is hidden), else what the
+/// surface it hits sends to the camera.
 fn radiance(
     p: &Prepared,
     constant: &[Option<Terms>],
@@ -318,94 +330,198 @@ fn radiance(
     scratch: &mut Scratch,
     mut add: impl FnMut(usize, f64),
 ) {
-    let n_wl = p.params.n_wl as usize;
-    let sp = |off: u32, i: usize| p.spectra[off as usize + i] as f64;
-    let expand = |c: &[(usize, f64)], off: u32, i: usize| -> f64 {
-        c.iter().map(|&(j, c)| c * sp(off, j * n_wl + i)).sum()
-    };
-    let Scratch {
-        diffuse: cd,
-        specular: cs,
-        behind: ct,
-        lookup,
-    } = scratch;
-    let d = || background_direction(p, x, y);
     let [px, py] = pixel_position(p, x, y);
     match hit(&p.objects, candidates(p, x, y), px, py) {
         None if p.params.flags & HIDE_BACKGROUND != 0 => {}
-        None => {
-            let lt = &p.lightings[p.params.background as usize];
-            let ct = map_sample(p, constant, lt.background_map, d, lookup, ct);
-            for i in 0..n_wl {
-                add(i, expand(ct, lt.spectra, i));
-            }
-        }
+        None => background(p, constant, [x, y], scratch, &mut add),
         Some((oi, n)) => {
-            let o = &p.objects[oi];
-            let m = &p.materials[o.material as usize];
-            let lt = &p.lightings[o.lighting as usize];
-            let cos_v = n[2].clamp(0.0, 1.0);
-            // The mirror direction, for the specular paths only.
-            let rv = || {
-                [
-                    2.0 * n[2] * n[0],
-                    2.0 * n[2] * n[1],
-                    2.0 * n[2] * n[2] - 1.0,
-                ]
+            let at = Hit {
+                oi,
+                n,
+                px,
+                pixel: [x, y],
             };
-            let [kd, ks, shininess, _] = m.coef.map(|v| v as f64);
-            let transparent = m.flags & TRANSPARENT != 0;
-            let film = (m.flags & HAS_FILM != 0)
-                .then(|| p.films[o.material as usize].as_ref())
-                .flatten();
+            let shading = Shading::of(p, &p.objects[oi]);
+            let lit = hit_lighting(p, constant, &at, &shading, scratch);
+            surface(p, &at, &shading, &lit, &mut add);
+        }
+    }
+}
+
+/// Where a pixel's ray hit: the object, its unit normal, the world x of the pixel's centre and
+/// the pixel.
+struct Hit {
+    oi: usize,
+    n: [f64; 3],
+    px: f64,
+    pixel: [usize; 2],
+}
+
+/// How the surface hit reflects: its coefficients, whether it is transparent, its film, whether
+/// it reflects specularly at all, and where its diffuse reflectance is (None: black).
+struct Shading<'a> {
+    kd: f64,
+    ks: f64,
+    shininess: f64,
+    transparent: bool,
+    film: Option<&'a CpuFilm>,
+    specular: bool,
+    diffuse: Option<u32>,
+}
+
+impl<'a> Shading<'a> {
+    /// The shading of object `o`'s material.
+    fn of(p: &'a Prepared, o: &GpuObject) -> Shading<'a> {
+        let m = &p.materials[o.material as usize];
+        let [kd, ks, shininess, _] = m.coef.map(|v| v as f64);
+        let film = (m.flags & HAS_FILM != 0)
+            .then(|| p.films[o.material as usize].as_ref())
+            .flatten();
+        Shading {
+            kd,
+            ks,
+            shininess,
+            transparent: m.flags & TRANSPARENT != 0,
+            film,
             // A matte surface (no film, ks = 0) reflects nothing specularly: its specular
             // lighting is not looked up (most of the chart: the patches and the backdrop).
-            let specular = film.is_some() || ks != 0.0;
-            let cd = map_sample(p, constant, lt.diffuse_map, || n, lookup, cd);
-            let cs = if specular {
-                map_sample(p, constant, o.spec_map, rv, lookup, cs)
-            } else {
-                &[]
-            };
-            let ct = if transparent {
-                map_sample(p, constant, lt.background_map, d, lookup, ct)
-            } else {
-                &[]
-            };
-            let (sun_d, sun_s) = if lt.has_sun != 0 {
-                let s = lt.sun.map(|v| v as f64);
-                let l = [s[0], s[1], s[2]];
-                let s_lobe = if specular {
-                    s[3] * (shininess + 1.0) / (2.0 * PI) * lobe(dot(rv(), l), shininess)
-                } else {
-                    0.0
-                };
-                (s[3] * dot(n, l).max(0.0) * FRAC_1_PI, s_lobe)
-            } else {
-                (0.0, 0.0)
-            };
-            let scale = ramp_scale(o, px);
-            let sun_spd = lt.layout[1];
-            for i in 0..n_wl {
-                let e = sp(sun_spd, i);
-                let ld = expand(cd, lt.spectra, i) + sun_d * e;
-                let ls = expand(cs, lt.spectra, i) + sun_s * e;
-                let (fr, ft) = match film {
-                    Some(f) => film_rt(f, i, cos_v, scale),
-                    None => (ks, 1.0),
-                };
-                let l = if transparent {
-                    fr * ls + ft * expand(ct, lt.spectra, i)
-                } else {
-                    let rd = if m.flags & HAS_DIFFUSE != 0 {
-                        sp(m.diffuse_offset, i)
-                    } else {
-                        0.0
-                    };
-                    kd * rd * ft * ld + fr * ls
-                };
-                add(i, l);
-            }
+            specular: film.is_some() || ks != 0.0,
+            diffuse: (m.flags & HAS_DIFFUSE != 0).then_some(m.diffuse_offset),
         }
+    }
+}
+
+/// The light reaching a hit: the diffuse, specular and (transparent) behind coefficients of
+/// its lighting's maps, and the sun's diffuse and specular factors (in units of its SPD).
+struct Lit<'a> {
+    diffuse: &'a [(usize, f64)],
+    specular: &'a [(usize, f64)],
+    behind: &'a [(usize, f64)],
+    sun_diffuse: f64,
+    sun_specular: f64,
+}
+
+/// Value `i` of the spectrum at offset `off` of the prepared spectra.
+fn spectrum_at(p: &Prepared, off: u32, i: usize) -> f64 {
+    p.spectra[off as usize + i] as f64
+}
+
+/// The coefficients `c` expanded with the lighting's spectra (from offset `off`) at node `i`.
+fn expand(p: &Prepared, c: &[(usize, f64)], off: u32, i: usize) -> f64 {
+    let n_wl = p.params.n_wl as usize;
+    c.iter()
+        .map(|&(j, c)| c * spectrum_at(p, off, j * n_wl + i))
+        .sum()
+}
+
+/// The mirror direction of the view ray (+Z towards the camera) about the normal `n`.
+fn mirror(n: [f64; 3]) -> [f64; 3] {
+    [
+        2.0 * n[2] * n[0],
+        2.0 * n[2] * n[1],
+        2.0 * n[2] * n[2] - 1.0,
+    ]
+}
+
+/// The environment seen through pixel `[x, y]`, at each node.
+fn background(
+    p: &Prepared,
+    constant: &[Option<Terms>],
+    [x, y]: [usize; 2],
+    scratch: &mut Scratch,
+    add: &mut impl FnMut(usize, f64),
+) {
+    let Scratch { behind, lookup, .. } = scratch;
+    let lt = &p.lightings[p.params.background as usize];
+    let d = || background_direction(p, x, y);
+    let ct = map_sample(p, constant, lt.background_map, d, lookup, behind);
+    for i in 0..p.params.n_wl as usize {
+        add(i, expand(p, ct, lt.spectra, i));
+    }
+}
+
+/// The light reaching the hit `at` from its lighting: the maps looked up where the surface
+/// needs them (specular: only if it reflects so; behind: only if transparent), and the sun.
+fn hit_lighting<'a>(
+    p: &Prepared,
+    constant: &'a [Option<Terms>],
+    at: &Hit,
+    s: &Shading,
+    scratch: &'a mut Scratch,
+) -> Lit<'a> {
+    let Scratch {
+        diffuse,
+        specular,
+        behind,
+        lookup,
+    } = scratch;
+    let o = &p.objects[at.oi];
+    let lt = &p.lightings[o.lighting as usize];
+    let n = at.n;
+    let d = || background_direction(p, at.pixel[0], at.pixel[1]);
+    let diffuse = map_sample(p, constant, lt.diffuse_map, || n, lookup, diffuse);
+    let specular = if s.specular {
+        map_sample(p, constant, o.spec_map, || mirror(n), lookup, specular)
+    } else {
+        &[]
+    };
+    let behind = if s.transparent {
+        map_sample(p, constant, lt.background_map, d, lookup, behind)
+    } else {
+        &[]
+    };
+    let (sun_diffuse, sun_specular) = sun_factors(lt, n, s);
+    Lit {
+        diffuse,
+        specular,
+        behind,
+        sun_diffuse,
+        sun_specular,
+    }
+}
+
+/// The sun's diffuse factor `E max(N.l, 0) / pi` and specular one
+/// `E (n + 1) / (2 pi) max(R_v.l, 0)^n` (0 without a specular reflection), 0 without a sun.
+fn sun_factors(lt: &GpuLighting, n: [f64; 3], s: &Shading) -> (f64, f64) {
+    if lt.has_sun == 0 {
+        return (0.0, 0.0);
+    }
+    let sv = lt.sun.map(|v| v as f64);
+    let l = [sv[0], sv[1], sv[2]];
+    let s_lobe = if s.specular {
+        sv[3] * (s.shininess + 1.0) / (2.0 * PI) * lobe(dot(mirror(n), l), s.shininess)
+    } else {
+        0.0
+    };
+    (sv[3] * dot(n, l).max(0.0) * FRAC_1_PI, s_lobe)
+}
+
+/// What the surface hit sends to the camera at each node (the module docs' model): a
+/// transparent one its reflection and the environment behind through its film, an opaque one
+/// its diffuse reflection under its film and its specular one.
+fn surface(p: &Prepared, at: &Hit, s: &Shading, lit: &Lit, add: &mut impl FnMut(usize, f64)) {
+    let o = &p.objects[at.oi];
+    let lt = &p.lightings[o.lighting as usize];
+    let cos_v = at.n[2].clamp(0.0, 1.0);
+    let scale = ramp_scale(o, at.px);
+    let sun_spd = lt.layout[1];
+    for i in 0..p.params.n_wl as usize {
+        let e = spectrum_at(p, sun_spd, i);
+        let ld = expand(p, lit.diffuse, lt.spectra, i) + lit.sun_diffuse * e;
+        let ls = expand(p, lit.specular, lt.spectra, i) + lit.sun_specular * e;
+        let (fr, ft) = match s.film {
+            Some(f) => film_rt(f, i, cos_v, scale),
+            None => (s.ks, 1.0),
+        };
+        let l = if s.transparent {
+            fr * ls + ft * expand(p, lit.behind, lt.spectra, i)
+        } else {
+            let rd = match s.diffuse {
+                Some(off) => spectrum_at(p, off, i),
+                None => 0.0,
+            };
+            s.kd * rd * ft * ld + fr * ls
+        };
+        add(i, l);
     }
 }

@@ -154,6 +154,16 @@ fn filtered(
 /// `specmap convert`, lit by the spectra it holds whatever `light` says
 /// ([`super::own_spectra`]: a basis EXR of either version, or a spectral EXR projected onto its own
 /// principal components). The sun becomes a directional light and leaves the map.
+///
+/// ```
+/// use specmap::render::env;
+/// use std::path::Path;
+///
+/// let (lighting, report) = env::load(Path::new("envmaps/forest.exr"), "D65")?;
+/// println!("{} {:?}: sun {:?}", report.kind, report.input_size, report.sun_direction);
+/// assert_eq!(lighting.coefficients(), report.spectra);
+/// # Ok::<(), specmap::error::Error>(())
+/// ```
 pub fn load(path: &Path, light: &str) -> Result<(Lighting, EnvReport)> {
     let channels = exr_channels(path).unwrap_or_default();
     let has = |n: &str| channels.iter().any(|c| c == n);
@@ -345,6 +355,7 @@ fn load_rgb(path: &Path, light: &str) -> Result<(Lighting, EnvReport)> {
     Ok((paper_lighting(light, basis, coeffs, sun)?, report))
 }
 
+/// The text attribute `name`, if there is one.
 fn text_attr(attrs: &[(String, AttrValue)], name: &str) -> Option<String> {
     attrs.iter().find_map(|(n, v)| match v {
         AttrValue::Text(t) if n == name => Some(t.clone()),
@@ -352,10 +363,12 @@ fn text_attr(attrs: &[(String, AttrValue)], name: &str) -> Option<String> {
     })
 }
 
-/// Reads the four channels of a `basis` EXR into two RGB maps (c and s) of its layout.
+/// A version-1 basis file's first layer, as flat samples.
+type FlatLayer = exr::image::Layer<exr::image::AnyChannels<exr::image::FlatSamples>>;
+
+/// Reads the four channels of a `basis` EXR (version 1) into two RGB maps (c and s) of its
+/// layout: a pipeline of reading the layer, its header, its pixels, its maps and its spectra.
 fn load_basis(path: &Path) -> Result<(Lighting, EnvReport)> {
-    use exr::image::FlatSamples;
-    use exr::meta::attribute::AttributeValue;
     use exr::prelude::read_first_flat_layer_from_file;
     let image = read_first_flat_layer_from_file(path).map_err(|e| {
         Error::invalid(format!(
@@ -365,105 +378,222 @@ fn load_basis(path: &Path) -> Result<(Lighting, EnvReport)> {
     })?;
     let layer = &image.layer_data;
     let (w, h) = (layer.size.0, layer.size.1);
-    let channel = |name: &str| -> Result<Vec<f32>> {
-        let c = layer
-            .channel_data
-            .list
-            .iter()
-            .find(|c| c.name.to_string() == name)
-            .ok_or_else(|| Error::invalid(format!("{}: no channel {name}", path.display())))?;
-        Ok(match &c.sample_data {
-            FlatSamples::F16(v) => v.iter().map(|x| x.to_f32()).collect(),
-            FlatSamples::F32(v) => v.clone(),
-            FlatSamples::U32(v) => v.iter().map(|&x| x as f32).collect(),
-        })
+    let channels = V1Channels::read(path, layer)?;
+    let header = V1Header::read(path, layer)?;
+    let layout = v1_layout(path, layer, w, h)?;
+    let (c_img, s) = channels.pixels(path, header.scale, w, h)?;
+    let (coeffs, sun) = v1_maps(path, layout, c_img, &s)?;
+    let (lit, sun_label) = header.lighting(path, layer, coeffs, sun)?;
+    let report = EnvReport {
+        file: path.display().to_string(),
+        kind: "basis",
+        input_size: [w, h],
+        light: header.light,
+        light_used: false,
+        sun_spd: sun_label,
+        sun_direction: sun.map(|s| s.direction),
+        sun_irradiance: sun.map(|s| s.irradiance),
+        spectra: 4,
+        projection: None,
     };
-    let (cr, cg, cb) = (channel("c_R")?, channel("c_G")?, channel("c_B")?);
-    let sun_ch = channel("sun").unwrap_or_else(|_| vec![0.0; w * h]);
-    let mut attrs = Vec::new();
-    for (name, value) in layer.attributes.other.iter() {
-        if let AttributeValue::Text(t) = value {
-            attrs.push((name.to_string(), AttrValue::Text(t.to_string())));
+    Ok((lit, report))
+}
+
+/// A version-1 file's channels: `c_R`, `c_G`, `c_B` and the sun's (zero where it has none).
+struct V1Channels {
+    c: [Vec<f32>; 3],
+    sun: Vec<f32>,
+}
+
+impl V1Channels {
+    /// The channels of `layer`: an error naming the first colour channel missing.
+    fn read(path: &Path, layer: &FlatLayer) -> Result<V1Channels> {
+        let channel = |name: &str| flat_channel(path, layer, name);
+        let (cr, cg, cb) = (channel("c_R")?, channel("c_G")?, channel("c_B")?);
+        let sun = channel("sun").unwrap_or_else(|_| vec![0.0; layer.size.0 * layer.size.1]);
+        Ok(V1Channels {
+            c: [cr, cg, cb],
+            sun,
+        })
+    }
+
+    /// The coefficients times the exposure's `scale` (non-finite ones black) and the sun's
+    /// values (non-negative); an error at a sun overflowed in half floats or a value beyond
+    /// [`MAX_RADIANCE`].
+    fn pixels(&self, path: &Path, scale: f32, w: usize, h: usize) -> Result<(RgbImage, Vec<f64>)> {
+        let [cr, cg, cb] = &self.c;
+        let mut c_img = RgbImage::new(w, h);
+        let mut s = vec![0.0; w * h];
+        for i in 0..w * h {
+            c_img.pixels[i] = [cr[i] * scale, cg[i] * scale, cb[i] * scale];
+            // The version-1 writer stored the sun channel as given, unscaled by EV (as a mask
+            // is): a sun beyond half floats' range is infinite there, and lost.
+            let v = self.sun[i] as f64;
+            if v.is_infinite() {
+                return Err(Error::invalid(format!(
+                    "{}: pixel ({}, {}) of the sun channel overflowed half floats; convert the \
+                     map again (--format basis now writes the K-spectrum form, which scales it)",
+                    path.display(),
+                    i % w,
+                    i / w
+                )));
+            }
+            s[i] = if v.is_finite() { v.max(0.0) } else { 0.0 };
+            if !c_img.pixels[i].iter().all(|v| v.is_finite()) {
+                c_img.pixels[i] = [0.0; 3];
+            }
+            let peak = c_img.pixels[i]
+                .iter()
+                .fold(s[i], |m, &v| m.max((v as f64).abs()));
+            if peak > MAX_RADIANCE {
+                return Err(too_bright(path, i % w, i / w, peak));
+            }
         }
+        Ok((c_img, s))
     }
-    let ev = layer
-        .attributes
-        .other
+}
+
+/// Channel `name` of `layer` as f32, whatever its sample type.
+fn flat_channel(path: &Path, layer: &FlatLayer, name: &str) -> Result<Vec<f32>> {
+    use exr::image::FlatSamples;
+    let c = layer
+        .channel_data
+        .list
         .iter()
-        .find_map(|(n, v)| match (n.to_string().as_str(), v) {
-            ("EV", AttributeValue::F32(x)) => Some(*x as f64),
-            ("EV", AttributeValue::F64(x)) => Some(*x),
-            _ => None,
-        });
-    let scale = ev.map(|e| e.exp2()).unwrap_or(1.0) as f32;
-    let light = text_attr(&attrs, "specmap.light").ok_or_else(|| {
-        Error::invalid(format!(
-            "{}: a basis map needs the specmap.light attribute that `specmap convert --format \
-             basis` writes",
-            path.display()
-        ))
-    })?;
-    let basis_names: Vec<String> = text_attr(&attrs, "specmap.basis")
-        .map(|b| b.split(',').map(String::from).collect())
-        .unwrap_or_else(|| fit::PAPER_BASIS.map(String::from).to_vec());
-    if basis_names.len() != 3 {
-        return Err(Error::invalid(format!(
-            "{}: specmap.basis must name three spectra",
-            path.display()
-        )));
+        .find(|c| c.name.to_string() == name)
+        .ok_or_else(|| Error::invalid(format!("{}: no channel {name}", path.display())))?;
+    Ok(match &c.sample_data {
+        FlatSamples::F16(v) => v.iter().map(|x| x.to_f32()).collect(),
+        FlatSamples::F32(v) => v.clone(),
+        FlatSamples::U32(v) => v.iter().map(|&x| x as f32).collect(),
+    })
+}
+
+/// What a version-1 file's header says: its light, the names of its basis, its exposure.
+struct V1Header {
+    light: String,
+    basis_names: Vec<String>,
+    /// `2^EV` (1 without `EV`).
+    scale: f32,
+}
+
+impl V1Header {
+    /// The header of `layer`: an error without `specmap.light` or with a basis not of three.
+    fn read(path: &Path, layer: &FlatLayer) -> Result<V1Header> {
+        use exr::meta::attribute::AttributeValue;
+        let mut attrs = Vec::new();
+        for (name, value) in layer.attributes.other.iter() {
+            if let AttributeValue::Text(t) = value {
+                attrs.push((name.to_string(), AttrValue::Text(t.to_string())));
+            }
+        }
+        let ev =
+            layer
+                .attributes
+                .other
+                .iter()
+                .find_map(|(n, v)| match (n.to_string().as_str(), v) {
+                    ("EV", AttributeValue::F32(x)) => Some(*x as f64),
+                    ("EV", AttributeValue::F64(x)) => Some(*x),
+                    _ => None,
+                });
+        let scale = ev.map(|e| e.exp2()).unwrap_or(1.0) as f32;
+        let light = text_attr(&attrs, "specmap.light").ok_or_else(|| {
+            Error::invalid(format!(
+                "{}: a basis map needs the specmap.light attribute that `specmap convert \
+                 --format basis` writes",
+                path.display()
+            ))
+        })?;
+        let basis_names: Vec<String> = text_attr(&attrs, "specmap.basis")
+            .map(|b| b.split(',').map(String::from).collect())
+            .unwrap_or_else(|| fit::PAPER_BASIS.map(String::from).to_vec());
+        if basis_names.len() != 3 {
+            return Err(Error::invalid(format!(
+                "{}: specmap.basis must name three spectra",
+                path.display()
+            )));
+        }
+        Ok(V1Header {
+            light,
+            basis_names,
+            scale,
+        })
     }
+
+    /// The lighting of the maps: the spectra the file stores (the ones its pixels were made
+    /// of), else the light and basis by name, and the label of its sun's SPD.
+    fn lighting(
+        &self,
+        path: &Path,
+        layer: &FlatLayer,
+        coeffs: Maps,
+        sun: Option<Sun>,
+    ) -> Result<(Lighting, String)> {
+        let Some((mut spectra, sun_spd)) = v1_stored_spectra(layer) else {
+            let b = &self.basis_names;
+            let names = [&b[0], &b[1], &b[2]].map(|s| s.trim());
+            let lit = paper_lighting(&self.light, names, coeffs, sun).map_err(|e| {
+                Error::invalid(format!(
+                    "{}: the map's light or basis ({}; {}) is not a known spectrum: {e}",
+                    path.display(),
+                    self.light,
+                    b.join(", ")
+                ))
+            })?;
+            return Ok((lit, SUN_SPD.to_string()));
+        };
+        let label = "the file's sunSPD".to_string();
+        spectra.push(sun_spd.clone());
+        let lit = Lighting {
+            label: self.light.clone(),
+            spectra: LightSpectra::Own {
+                spectra,
+                sun_spd,
+                sun_label: label.clone(),
+            },
+            environment: Environment::Map(Arc::new(coeffs)),
+            sun,
+        };
+        Ok((lit, label))
+    }
+}
+
+/// The layout of a `w x h` version-1 file: its `envmap` attribute's, else the one its size
+/// says.
+fn v1_layout(path: &Path, layer: &FlatLayer, w: usize, h: usize) -> Result<Layout> {
     let envmap = files::envmap_attr(&layer.attributes).map(|a| match a {
         EnvmapAttr::LatLong => Layout::LatLong,
         EnvmapAttr::Cube => Layout::Cube,
     });
-    let layout =
-        detect(w, h, envmap).map_err(|e| Error::invalid(format!("{}: {e}", path.display())))?;
-    let mut c_img = RgbImage::new(w, h);
-    let mut s = vec![0.0; w * h];
-    for i in 0..w * h {
-        c_img.pixels[i] = [cr[i] * scale, cg[i] * scale, cb[i] * scale];
-        // The version-1 writer stored the sun channel as given, unscaled by EV (as a mask is):
-        // a sun beyond half floats' range is infinite there, and lost.
-        let v = sun_ch[i] as f64;
-        if v.is_infinite() {
-            return Err(Error::invalid(format!(
-                "{}: pixel ({}, {}) of the sun channel overflowed half floats; convert the map \
-                 again (--format basis now writes the K-spectrum form, which scales it)",
-                path.display(),
-                i % w,
-                i / w
-            )));
-        }
-        s[i] = if v.is_finite() { v.max(0.0) } else { 0.0 };
-        if !c_img.pixels[i].iter().all(|v| v.is_finite()) {
-            c_img.pixels[i] = [0.0; 3];
-        }
-        let peak = c_img.pixels[i]
-            .iter()
-            .fold(s[i], |m, &v| m.max((v as f64).abs()));
-        if peak > MAX_RADIANCE {
-            return Err(too_bright(path, i % w, i / w, peak));
-        }
-    }
-    let map = EnvMap::new(layout, c_img)
-        .map_err(|e| Error::invalid(format!("{}: {e}", path.display())))?;
-    let sun = directional(&map, &s);
-    // Coefficients resample linearly (negative ones included: EnvMap's filter is linear). The
-    // background shows the sun: its pixels' fourth coefficient, on the sun's SPD.
+    detect(w, h, envmap).map_err(|e| Error::invalid(format!("{}: {e}", path.display())))
+}
+
+/// The lighting's and the background's maps of the coefficients `c_img` and the sun `s` (a
+/// value per pixel), and the sun as a directional light. Coefficients resample linearly
+/// (negative ones included: EnvMap's filter is linear). The background shows the sun: its
+/// pixels' fourth coefficient, on the sun's SPD.
+fn v1_maps(path: &Path, layout: Layout, c_img: RgbImage, s: &[f64]) -> Result<(Maps, Option<Sun>)> {
+    let bad = |e| Error::invalid(format!("{}: {e}", path.display()));
+    let (w, h) = (c_img.width, c_img.height);
+    let map = EnvMap::new(layout, c_img).map_err(bad)?;
+    let sun = directional(&map, s);
     let mut coeffs = maps(&map, &map, |p| [p[0] as f64, p[1] as f64, p[2] as f64]);
     let mut sun_img = RgbImage::new(w, h);
-    for (p, v) in sun_img.pixels.iter_mut().zip(&s) {
+    for (p, v) in sun_img.pixels.iter_mut().zip(s) {
         p[0] = *v as f32;
     }
-    let sun_map = EnvMap::new(layout, sun_img)
-        .map_err(|e| Error::invalid(format!("{}: {e}", path.display())))?;
+    let sun_map = EnvMap::new(layout, sun_img).map_err(bad)?;
     let sun_seen = sun_map.resample(Layout::LatLong, coeffs.seen.height);
     for (t, p) in coeffs.seen.texels.iter_mut().zip(&sun_seen.image.pixels) {
         t[3] = p[0];
     }
-    let names = [&basis_names[0], &basis_names[1], &basis_names[2]].map(|s| s.trim());
-    // The spectra the file stores are the ones its pixels were made of: use them (the names
-    // are a fallback for files written before they were stored).
+    Ok((coeffs, sun))
+}
+
+/// The three basis spectra and the sun's SPD (D65 without one) a version-1 file stores, if it
+/// stores its wavelengths and basis (files written before they were stored have names only).
+fn v1_stored_spectra(layer: &FlatLayer) -> Option<(Vec<Tabulated>, Tabulated)> {
     let floats = |name: &str| {
         layer
             .attributes
@@ -475,59 +605,16 @@ fn load_basis(path: &Path) -> Result<(Lighting, EnvReport)> {
                 _ => None,
             })
     };
-    let stored = (|| -> Option<(Vec<Tabulated>, Tabulated)> {
-        let wl = floats("specmap.wavelengths")?;
-        let tab = |v: Vec<f64>| Tabulated::new(wl.clone(), v).ok();
-        let b: Option<Vec<Tabulated>> = (0..3)
-            .map(|j| tab(floats(&format!("specmap.basis{j}"))?))
-            .collect();
-        let sun = floats("specmap.sunSPD").and_then(tab).or_else(|| {
-            let d65 = crate::data::spectrum(SUN_SPD).ok()?.data;
-            Some(d65)
-        })?;
-        Some((b?, sun))
-    })();
-    let unknown = |e: Error| {
-        Error::invalid(format!(
-            "{}: the map's light or basis ({light}; {}) is not a known spectrum: {e}",
-            path.display(),
-            basis_names.join(", ")
-        ))
-    };
-    let (lit, sun_label) = match stored {
-        Some((mut spectra, sun_spd)) => {
-            let label = "the file's sunSPD".to_string();
-            spectra.push(sun_spd.clone());
-            let lit = Lighting {
-                label: light.clone(),
-                spectra: LightSpectra::Own {
-                    spectra,
-                    sun_spd,
-                    sun_label: label.clone(),
-                },
-                environment: Environment::Map(Arc::new(coeffs)),
-                sun,
-            };
-            (lit, label)
-        }
-        None => (
-            paper_lighting(&light, names, coeffs, sun).map_err(unknown)?,
-            SUN_SPD.to_string(),
-        ),
-    };
-    let report = EnvReport {
-        file: path.display().to_string(),
-        kind: "basis",
-        input_size: [w, h],
-        light,
-        light_used: false,
-        sun_spd: sun_label,
-        sun_direction: sun.map(|s| s.direction),
-        sun_irradiance: sun.map(|s| s.irradiance),
-        spectra: 4,
-        projection: None,
-    };
-    Ok((lit, report))
+    let wl = floats("specmap.wavelengths")?;
+    let tab = |v: Vec<f64>| Tabulated::new(wl.clone(), v).ok();
+    let b: Option<Vec<Tabulated>> = (0..3)
+        .map(|j| tab(floats(&format!("specmap.basis{j}"))?))
+        .collect();
+    let sun = floats("specmap.sunSPD").and_then(tab).or_else(|| {
+        let d65 = crate::data::spectrum(SUN_SPD).ok()?.data;
+        Some(d65)
+    })?;
+    Some((b?, sun))
 }
 
 #[cfg(test)]

@@ -173,9 +173,57 @@ impl Gpu {
             }))
     }
 
-    /// Renders the prepared scene.
+    /// Renders the prepared scene: checked against the adapter's limits, uploaded, dispatched
+    /// and read back, each stage timed.
+    ///
+    /// ```no_run
+    /// use specmap::render::{gpu::Gpu, prepare::Prepared, Preset, Spectral};
+    ///
+    /// let scene = Preset::Cylinders.scene(512, 512, "D65", None)?;
+    /// let prepared = Prepared::new(&scene, &Spectral::default())?;
+    /// let gpu = Gpu::new()?; // once, for many frames
+    /// let (image, timing) = gpu.render(&prepared)?;
+    /// println!("{}x{} in {:.3} s", image.width, image.height, timing.compute_s);
+    /// # Ok::<(), specmap::error::Error>(())
+    /// ```
     pub fn render(&self, p: &Prepared) -> Result<(Image, GpuTiming)> {
         let t0 = Instant::now();
+        let (w, h) = (p.params.width as usize, p.params.height as usize);
+        let out_bytes = self.check_frame(p)?;
+        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let frame = self.upload(p, out_bytes)?;
+        self.poll()?;
+        let t1 = Instant::now();
+        self.dispatch(&frame.bind, w, h);
+        self.poll()?;
+        let t2 = Instant::now();
+        let mapped = self.copy_back(&frame, out_bytes);
+        self.poll()?;
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(Error::invalid(format!("GPU render failed: {e}")));
+        }
+        if let Some(e) = self.errors.lock().ok().and_then(|mut v| v.pop()) {
+            return Err(Error::invalid(format!("GPU render failed: {e}")));
+        }
+        let pixels = read_mapped(&frame.staging, mapped)?;
+        let t3 = Instant::now();
+        Ok((
+            Image {
+                width: w,
+                height: h,
+                pixels,
+            },
+            GpuTiming {
+                upload_s: (t1 - t0).as_secs_f64(),
+                compute_s: (t2 - t1).as_secs_f64(),
+                readback_s: (t3 - t2).as_secs_f64(),
+            },
+        ))
+    }
+
+    /// The image's size in bytes (four f32 a pixel): an error where it or a lighting's spectra
+    /// exceed what the adapter or the shader holds.
+    fn check_frame(&self, p: &Prepared) -> Result<u64> {
         let (w, h) = (p.params.width as usize, p.params.height as usize);
         let out_bytes = (w * h * 16) as u64;
         if out_bytes > self.limits.max_storage_buffer_binding_size {
@@ -197,7 +245,12 @@ impl Gpu {
                 4 * MAX_GROUPS
             )));
         }
-        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        Ok(out_bytes)
+    }
+
+    /// The prepared arrays as buffers, the output and its staging buffer, bound as the shader
+    /// declares.
+    fn upload(&self, p: &Prepared, out_bytes: u64) -> Result<Frame> {
         let params = self
             .device
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -224,24 +277,33 @@ impl Gpu {
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
+        // Binding i of the shader, in its order.
+        let bound = [
+            params, spectra, objects, materials, lightings, maps, texels, out, rows,
+        ];
         let layout = self.pipeline.get_bind_group_layout(0);
-        let entries: Vec<wgpu::BindGroupEntry> = [
-            &params, &spectra, &objects, &materials, &lightings, &maps, &texels, &out, &rows,
-        ]
-        .iter()
-        .enumerate()
-        .map(|(i, b)| wgpu::BindGroupEntry {
-            binding: i as u32,
-            resource: b.as_entire_binding(),
-        })
-        .collect();
+        let entries: Vec<wgpu::BindGroupEntry> = bound
+            .iter()
+            .enumerate()
+            .map(|(i, b)| wgpu::BindGroupEntry {
+                binding: i as u32,
+                resource: b.as_entire_binding(),
+            })
+            .collect();
         let bind = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("render"),
             layout: &layout,
             entries: &entries,
         });
-        self.poll()?;
-        let t1 = Instant::now();
+        Ok(Frame {
+            bind,
+            bound,
+            staging,
+        })
+    }
+
+    /// One invocation per pixel, in workgroups of 8 x 8.
+    fn dispatch(&self, bind: &wgpu::BindGroup, w: usize, h: usize) {
         let mut enc = self
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
@@ -251,53 +313,28 @@ impl Gpu {
                 timestamp_writes: None,
             });
             pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, &bind, &[]);
+            pass.set_bind_group(0, bind, &[]);
             pass.dispatch_workgroups((w as u32).div_ceil(8), (h as u32).div_ceil(8), 1);
         }
         self.queue.submit([enc.finish()]);
-        self.poll()?;
-        let t2 = Instant::now();
+    }
+
+    /// Copies the output to the staging buffer and asks for it mapped: what the mapping
+    /// answers once the device is polled.
+    fn copy_back(&self, frame: &Frame, out_bytes: u64) -> Mapped {
         let mut enc = self
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
-        enc.copy_buffer_to_buffer(&out, 0, &staging, 0, out_bytes);
+        enc.copy_buffer_to_buffer(frame.out(), 0, &frame.staging, 0, out_bytes);
         self.queue.submit([enc.finish()]);
-        let slice = staging.slice(..);
         let (tx, rx) = std::sync::mpsc::channel();
-        slice.map_async(wgpu::MapMode::Read, move |r| {
-            let _ = tx.send(r);
-        });
-        self.poll()?;
-        if let Some(e) = pollster::block_on(scope.pop()) {
-            return Err(Error::invalid(format!("GPU render failed: {e}")));
-        }
-        if let Some(e) = self.errors.lock().ok().and_then(|mut v| v.pop()) {
-            return Err(Error::invalid(format!("GPU render failed: {e}")));
-        }
-        rx.recv()
-            .map_err(|_| Error::invalid("GPU readback was cancelled"))?
-            .map_err(|e| Error::invalid(format!("GPU readback failed: {e}")))?;
-        let pixels: Vec<[f32; 3]> = {
-            let data = slice
-                .get_mapped_range()
-                .map_err(|e| Error::invalid(format!("GPU readback failed: {e}")))?;
-            let v: &[[f32; 4]] = bytemuck::cast_slice(&data);
-            v.iter().map(|p| [p[0], p[1], p[2]]).collect()
-        };
-        staging.unmap();
-        let t3 = Instant::now();
-        Ok((
-            Image {
-                width: w,
-                height: h,
-                pixels,
-            },
-            GpuTiming {
-                upload_s: (t1 - t0).as_secs_f64(),
-                compute_s: (t2 - t1).as_secs_f64(),
-                readback_s: (t3 - t2).as_secs_f64(),
-            },
-        ))
+        frame
+            .staging
+            .slice(..)
+            .map_async(wgpu::MapMode::Read, move |r| {
+                let _ = tx.send(r);
+            });
+        rx
     }
 
     fn poll(&self) -> Result<()> {
@@ -306,6 +343,42 @@ impl Gpu {
             .map(|_| ())
             .map_err(|e| Error::invalid(format!("waiting for the GPU: {e}")))
     }
+}
+
+/// A frame's buffers on the device: bound in the shader's order (the output among them), and
+/// the staging buffer the output is read back through.
+struct Frame {
+    bind: wgpu::BindGroup,
+    bound: [wgpu::Buffer; 9],
+    staging: wgpu::Buffer,
+}
+
+impl Frame {
+    /// The output image (binding 7).
+    fn out(&self) -> &wgpu::Buffer {
+        &self.bound[7]
+    }
+}
+
+/// What mapping the staging buffer answers.
+type Mapped = std::sync::mpsc::Receiver<std::result::Result<(), wgpu::BufferAsyncError>>;
+
+/// The linear RGB pixels of the mapped staging buffer (four f32 a pixel, the fourth unused).
+fn read_mapped(staging: &wgpu::Buffer, mapped: Mapped) -> Result<Vec<[f32; 3]>> {
+    mapped
+        .recv()
+        .map_err(|_| Error::invalid("GPU readback was cancelled"))?
+        .map_err(|e| Error::invalid(format!("GPU readback failed: {e}")))?;
+    let pixels: Vec<[f32; 3]> = {
+        let data = staging
+            .slice(..)
+            .get_mapped_range()
+            .map_err(|e| Error::invalid(format!("GPU readback failed: {e}")))?;
+        let v: &[[f32; 4]] = bytemuck::cast_slice(&data);
+        v.iter().map(|p| [p[0], p[1], p[2]]).collect()
+    };
+    staging.unmap();
+    Ok(pixels)
 }
 
 #[cfg(test)]

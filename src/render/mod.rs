@@ -35,6 +35,37 @@
 //!
 //! Both backends consume the same [`prepare::Prepared`] data (f32 spectra, maps and objects); the
 //! CPU computes in f64 with the thin-film module itself, the GPU in f32 with a WGSL port of it.
+//!
+//! # Use
+//! A scene (a [`Preset`] of the paper's figures, or one's own [`Scene`]), flattened once for a
+//! spectral sampling ([`prepare::Prepared`]), rendered on the CPU ([`cpu::render`]) or the GPU
+//! ([`gpu::Gpu::render`]); an environment map file lights it through [`env::load`]:
+//!
+//! ```
+//! use specmap::render::{cpu, env, prepare::Prepared, Preset, Spectral};
+//! use std::path::Path;
+//!
+//! // The chrome-oxide ball of Fig. 6 under a sunrise photograph (converted with D65 as the
+//! // main light), 24 x 24 pixels at 5 nm.
+//! let (lighting, report) = env::load(Path::new("envmaps/sunrise.exr"), "D65")?;
+//! assert_eq!(report.kind, "rgb");
+//! let scene = Preset::Ball.scene(24, 24, "D65", Some(lighting))?;
+//! let prepared = Prepared::new(&scene, &Spectral::default())?;
+//! let image = cpu::render(&prepared);
+//! assert_eq!(image.pixels.len(), 24 * 24);
+//! # Ok::<(), specmap::error::Error>(())
+//! ```
+//!
+//! # Modules
+//! - [`presets`]: the paper's figures as scenes; [`fingerprint`]: a scene's identity for caches.
+//! - [`env`]: environment lighting (pre-filtering, loading files): RGB and version-1 basis
+//!   files there, files of their own spectra in [`own_spectra`]; [`latlong`]: the coefficient
+//!   maps; [`env_report`]: what a load found; [`radiance_limit`]: the brightest value allowed.
+//! - [`prepare`]: a scene flattened for both renderers, in [`gpu_layout`]'s records, with
+//!   [`candidates`]: the objects each row and 8-pixel band can hit.
+//! - [`cpu`] and [`gpu`] (with `gpu.wgsl`): the renderers; [`image`]: images and comparisons.
+//! - [`plan`], [`stimuli`]: choosing a scene's quadrature (`--tolerance`); [`sweep`]: renders
+//!   over spectral samplings, timed and compared.
 
 pub mod candidates;
 pub mod cpu;

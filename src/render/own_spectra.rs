@@ -226,6 +226,18 @@ struct SunSum {
 }
 
 impl SunSum {
+    /// Adds `weight` times the spectrum `s` of luminance `y` seen towards `d`.
+    fn add(&mut self, weight: f64, s: &[f64], y: f64, d: [f64; 3]) {
+        for (acc, v) in self.spectrum.iter_mut().zip(s) {
+            *acc += weight * v;
+        }
+        for (acc, dk) in self.dir.iter_mut().zip(d) {
+            *acc += weight * y * dk;
+        }
+    }
+
+    /// The sun as a directional light of irradiance `Y`, and its SPD at `Y = 1` (None where
+    /// the pixels summed hold no light or no direction).
     fn light(&self, colour: &Colour, wl: &[f64]) -> Result<Option<(Sun, Tabulated)>> {
         let e = colour.luminance(&self.spectrum);
         let n = (self.dir.iter().map(|v| v * v).sum::<f64>()).sqrt();
@@ -245,11 +257,40 @@ impl SunSum {
 pub fn load_spectral(path: &Path, spectra: Spectra) -> Result<(Lighting, EnvReport)> {
     let info = files::read_spectral_info(path)?;
     let wl = info.wavelengths_nm.clone();
-    let n = wl.len();
     let (w, h) = (info.width, info.height);
     let colour = Colour::new(&wl)?;
     let geo = geometry(path, layout_of(path, w, h, info.envmap)?, w, h)?;
-    let mask = sun_mask(path, &geo, n, &colour)?;
+    let mask = sun_mask(path, &geo, wl.len(), &colour)?;
+    let (texels, sun) = spectral_texels(path, &geo, &mask, &colour)?;
+    let sun = sun.light(&colour, &wl)?;
+    let light = info.attributes.iter().find_map(|(k, v)| match v {
+        AttrValue::Text(t) if k == "specmap.light" => Some(t.clone()),
+        _ => None,
+    });
+    let (basis, coeffs, projection) = expand(texels, spectra, &colour)?;
+    own_lighting(Own {
+        path,
+        kind: "spectral",
+        input_size: [w, h],
+        light: light.unwrap_or_else(|| "the file's own spectra".into()),
+        wavelengths_nm: wl,
+        spectra: basis,
+        coeffs,
+        sun,
+        sun_label: "the sun pixels' own spectrum",
+        projection,
+    })
+}
+
+/// A spectral file's pixels averaged into the lighting's and the background's texels, the
+/// sun's pixels (`mask`) summed apart; an error at a value beyond [`MAX_RADIANCE`].
+fn spectral_texels(
+    path: &Path,
+    geo: &EnvMap,
+    mask: &[bool],
+    colour: &Colour,
+) -> Result<(TexelPair, SunSum)> {
+    let (w, n) = (geo.image.width, colour.weights.len());
     let mut texels = TexelPair::new(geo.used_pixels(), n);
     let mut sun = SunSum {
         spectrum: vec![0.0; n],
@@ -279,12 +320,7 @@ pub fn load_spectral(path: &Path, spectra: Spectra) -> Result<(Lighting, EnvRepo
             }
             if mask[y * w + x] {
                 let yl = colour.luminance(&px).max(0.0);
-                for (a, v) in sun.spectrum.iter_mut().zip(&px) {
-                    *a += omega * v;
-                }
-                for (a, dk) in sun.dir.iter_mut().zip(d) {
-                    *a += omega * yl * dk;
-                }
+                sun.add(omega, &px, yl, d);
                 // The background shows the sun; the lighting's texel keeps the sun's solid angle,
                 // dark: its light is the directional light's now.
                 texels.seen.add(d, omega, &px);
@@ -298,76 +334,94 @@ pub fn load_spectral(path: &Path, spectra: Spectra) -> Result<(Lighting, EnvRepo
     if let Some((x, y, v)) = too_large {
         return Err(too_bright(path, x, y, v));
     }
-    let sun = sun.light(&colour, &wl)?;
-    let text = |name: &str| {
-        info.attributes.iter().find_map(|(k, v)| match v {
-            AttrValue::Text(t) if k == name => Some(t.clone()),
-            _ => None,
-        })
-    };
-    let light = text("specmap.light").unwrap_or_else(|| "the file's own spectra".into());
-    let (basis, coeffs, projection) = match spectra {
+    Ok((texels, sun))
+}
+
+/// The spectra a spectral file's texels expand with, their coefficient maps and, projected
+/// onto their own basis, how well it holds them.
+fn expand(
+    mut texels: TexelPair,
+    spectra: Spectra,
+    colour: &Colour,
+) -> Result<(Vec<Vec<f64>>, Maps, Option<Projection>)> {
+    let n = colour.weights.len();
+    match spectra {
         Spectra::Full => {
             let basis: Vec<Vec<f64>> = (0..n)
                 .map(|j| (0..n).map(|i| (i == j) as u8 as f64).collect())
                 .collect();
-            (basis, texels.pack(n, |s, out| out.copy_from_slice(s)), None)
+            Ok((basis, texels.pack(n, |s, out| out.copy_from_slice(s)), None))
         }
         Spectra::Own => {
             let (tw, th) = (texels.light.w, texels.light.h);
             let light_values = std::mem::replace(&mut texels.light, Texels::new(1, 0)).finish();
-            let (basis, p) = project(&light_values, n, tw, th, &colour)?;
+            let (basis, p) = project(&light_values, n, tw, th, colour)?;
             let f = |s: &[f64], out: &mut [f64]| basis.project(s, out);
             let (sw, sh) = (texels.seen.w, texels.seen.h);
             let maps = Maps {
                 light: pack(&light_values, n, basis.len(), tw, th, &f),
                 seen: pack(&texels.seen.finish(), n, basis.len(), sw, sh, &f),
             };
-            (basis.spectra.clone(), maps, Some(p))
+            Ok((basis.spectra.clone(), maps, Some(p)))
         }
-    };
-    let (sun_dir, sun_irr) = (
-        sun.as_ref().map(|s| s.0.direction),
-        sun.as_ref().map(|s| s.0.irradiance),
-    );
-    let (sun, sun_spd, sun_label) = match &sun {
-        Some((s, spd)) => (
-            Some(*s),
-            spd.clone(),
-            "the sun pixels' own spectrum".to_string(),
-        ),
+    }
+}
+
+/// What a file of its own spectra loaded as, for [`own_lighting`].
+struct Own<'a> {
+    path: &'a Path,
+    /// [`EnvReport::kind`].
+    kind: &'static str,
+    input_size: [usize; 2],
+    light: String,
+    wavelengths_nm: Vec<f64>,
+    /// The spectra the coefficients expand with, on `wavelengths_nm`.
+    spectra: Vec<Vec<f64>>,
+    coeffs: Maps,
+    sun: Option<(Sun, Tabulated)>,
+    /// What the sun's SPD is, where there is a sun.
+    sun_label: &'static str,
+    projection: Option<Projection>,
+}
+
+/// The lighting of a file's own spectra and its report (without a sun, its SPD is
+/// [`SUN_SPD`]'s, labelled "none").
+fn own_lighting(o: Own) -> Result<(Lighting, EnvReport)> {
+    let (sun, sun_spd, sun_label) = match &o.sun {
+        Some((s, spd)) => (Some(*s), spd.clone(), o.sun_label.to_string()),
         None => (
             None,
             crate::data::spectrum(SUN_SPD)?.data,
             "none".to_string(),
         ),
     };
-    let spectra_tab = basis
+    let spectra = o
+        .spectra
         .into_iter()
-        .map(|b| Tabulated::new(wl.clone(), b))
+        .map(|b| Tabulated::new(o.wavelengths_nm.clone(), b))
         .collect::<Result<Vec<_>>>()?;
-    let k = spectra_tab.len();
+    let k = spectra.len();
     let lighting = Lighting {
-        label: light.clone(),
+        label: o.light.clone(),
         spectra: LightSpectra::Own {
-            spectra: spectra_tab,
+            spectra,
             sun_spd,
             sun_label: sun_label.clone(),
         },
-        environment: Environment::Map(Arc::new(coeffs)),
+        environment: Environment::Map(Arc::new(o.coeffs)),
         sun,
     };
     let report = EnvReport {
-        file: path.display().to_string(),
-        kind: "spectral",
-        input_size: [w, h],
-        light,
+        file: o.path.display().to_string(),
+        kind: o.kind,
+        input_size: o.input_size,
+        light: o.light,
         light_used: false,
         sun_spd: sun_label,
-        sun_direction: sun_dir,
-        sun_irradiance: sun_irr,
+        sun_direction: sun.map(|s| s.direction),
+        sun_irradiance: sun.map(|s| s.irradiance),
         spectra: k,
-        projection,
+        projection: o.projection,
     };
     Ok((lighting, report))
 }
@@ -460,9 +514,8 @@ fn project(
 /// sun's spectrum's index in `specmap.basisSun` (its coefficient becomes the directional light).
 pub fn load_basis_k(path: &Path) -> Result<(Lighting, EnvReport)> {
     use exr::prelude::read_first_flat_layer_from_file;
-    let bad = |what: String| Error::invalid(format!("{}: {what}", path.display()));
     let image = read_first_flat_layer_from_file(path)
-        .map_err(|e| bad(format!("reading the basis OpenEXR: {e}")))?;
+        .map_err(|e| bad(path, format!("reading the basis OpenEXR: {e}")))?;
     let layer = &image.layer_data;
     let (w, h) = (layer.size.0, layer.size.1);
     let attrs: Vec<(String, AttrValue)> = layer
@@ -472,48 +525,166 @@ pub fn load_basis_k(path: &Path) -> Result<(Lighting, EnvReport)> {
         .chain(image.attributes.other.iter())
         .filter_map(|(n, v)| files::attr_from_exr(v).map(|a| (n.to_string(), a)))
         .collect();
-    let get = |name: &str| {
-        attrs
-            .iter()
-            .find(|(n, _)| n == name)
-            .map(|(_, v)| v.clone())
-    };
-    let floats = |name: &str| match get(name) {
-        Some(AttrValue::F32Vec(v)) => Ok(v.iter().map(|&x| x as f64).collect::<Vec<f64>>()),
-        _ => Err(bad(format!(
-            "a K-spectrum basis map needs the float-vector attribute {name}"
-        ))),
-    };
-    let int = |name: &str| match get(name) {
-        Some(AttrValue::I32(v)) => Some(v as i64),
-        Some(AttrValue::F32(v)) => Some(v as i64),
-        _ => None,
-    };
-    let k = int("specmap.basisK")
-        .filter(|&k| k > 0 && k <= 100)
-        .ok_or_else(|| bad("a K-spectrum basis map needs specmap.basisK (1 to 100)".into()))?
-        as usize;
-    let wl = floats("specmap.wavelengths")?;
-    let colour = Colour::new(&wl)?;
-    let spectra: Vec<Vec<f64>> = (0..k)
-        .map(|j| {
-            let s = floats(&format!("specmap.basis{j:02}"))?;
-            if s.len() != wl.len() {
-                return Err(bad(format!(
-                    "specmap.basis{j:02} has {} values for {} wavelengths",
-                    s.len(),
-                    wl.len()
-                )));
-            }
-            Ok(s)
+    let header = KHeader::read(path, &attrs)?;
+    let coef = k_channels(path, layer, header.spectra.len())?;
+    let envmap = files::envmap_attr(&layer.attributes);
+    let geo = geometry(path, layout_of(path, w, h, envmap)?, w, h)?;
+    let (texels, sun) = header.texels(path, &geo, &coef)?;
+    let k = header.spectra.len();
+    let coeffs = texels.pack(k, |s, out| out.copy_from_slice(s));
+    let sun = sun.light(&header.colour, &header.wavelengths_nm)?;
+    own_lighting(Own {
+        path,
+        kind: "basis-k",
+        input_size: [w, h],
+        light: header.light,
+        wavelengths_nm: header.wavelengths_nm,
+        spectra: header.spectra,
+        coeffs,
+        sun,
+        sun_label: "the file's sun spectrum",
+        projection: None,
+    })
+}
+
+/// The error `what` about the file `path`.
+fn bad(path: &Path, what: String) -> Error {
+    Error::invalid(format!("{}: {what}", path.display()))
+}
+
+/// What a K-spectrum basis file's header says.
+struct KHeader {
+    wavelengths_nm: Vec<f64>,
+    colour: Colour,
+    /// The K spectra, on `wavelengths_nm`.
+    spectra: Vec<Vec<f64>>,
+    /// Which of them is the sun's.
+    sun_index: Option<usize>,
+    /// `2^EV` (1 without `EV`).
+    scale: f64,
+    light: String,
+}
+
+impl KHeader {
+    /// The header of the attributes `attrs`: an error without K (1 to 100), the wavelengths or
+    /// a spectrum of as many values.
+    fn read(path: &Path, attrs: &[(String, AttrValue)]) -> Result<KHeader> {
+        let get = |name: &str| {
+            attrs
+                .iter()
+                .find(|(n, _)| n == name)
+                .map(|(_, v)| v.clone())
+        };
+        let floats = |name: &str| match get(name) {
+            Some(AttrValue::F32Vec(v)) => Ok(v.iter().map(|&x| x as f64).collect::<Vec<f64>>()),
+            _ => Err(bad(
+                path,
+                format!("a K-spectrum basis map needs the float-vector attribute {name}"),
+            )),
+        };
+        let int = |name: &str| match get(name) {
+            Some(AttrValue::I32(v)) => Some(v as i64),
+            Some(AttrValue::F32(v)) => Some(v as i64),
+            _ => None,
+        };
+        let k = int("specmap.basisK")
+            .filter(|&k| k > 0 && k <= 100)
+            .ok_or_else(|| {
+                bad(
+                    path,
+                    "a K-spectrum basis map needs specmap.basisK (1 to 100)".into(),
+                )
+            })? as usize;
+        let wl = floats("specmap.wavelengths")?;
+        let colour = Colour::new(&wl)?;
+        let spectra: Vec<Vec<f64>> = (0..k)
+            .map(|j| {
+                let s = floats(&format!("specmap.basis{j:02}"))?;
+                if s.len() != wl.len() {
+                    return Err(bad(
+                        path,
+                        format!(
+                            "specmap.basis{j:02} has {} values for {} wavelengths",
+                            s.len(),
+                            wl.len()
+                        ),
+                    ));
+                }
+                Ok(s)
+            })
+            .collect::<Result<_>>()?;
+        let sun_index = int("specmap.basisSun")
+            .filter(|&i| i >= 0 && (i as usize) < k)
+            .map(|i| i as usize);
+        let ev = match get("EV") {
+            Some(AttrValue::F32(x)) => x as f64,
+            _ => 0.0,
+        };
+        let light = match get("specmap.light") {
+            Some(AttrValue::Text(t)) => t,
+            _ => "the file's own spectra".into(),
+        };
+        Ok(KHeader {
+            wavelengths_nm: wl,
+            colour,
+            spectra,
+            sun_index,
+            scale: ev.exp2(),
+            light,
         })
-        .collect::<Result<_>>()?;
-    let sun_index = int("specmap.basisSun").filter(|&i| i >= 0 && (i as usize) < k);
-    let ev = match get("EV") {
-        Some(AttrValue::F32(x)) => x as f64,
-        _ => 0.0,
-    };
-    let scale = ev.exp2();
+    }
+
+    /// The coefficients `coef` (a channel per spectrum) averaged into the lighting's and the
+    /// background's texels, the sun's coefficient summed apart as its spectrum; an error at a
+    /// value beyond [`MAX_RADIANCE`].
+    fn texels(&self, path: &Path, geo: &EnvMap, coef: &[Vec<f32>]) -> Result<(TexelPair, SunSum)> {
+        let (w, h, k) = (geo.image.width, geo.image.height, self.spectra.len());
+        let mut texels = TexelPair::new(geo.used_pixels(), k);
+        let mut sun = SunSum {
+            spectrum: vec![0.0; self.wavelengths_nm.len()],
+            dir: [0.0; 3],
+        };
+        let sun_y = self
+            .sun_index
+            .map(|i| self.colour.luminance(&self.spectra[i]));
+        let mut c = vec![0.0; k];
+        for y in 0..h {
+            for x in 0..w {
+                let (Some(d), omega) = (geo.direction(x, y), geo.solid_angle(x, y)) else {
+                    continue;
+                };
+                let i = y * w + x;
+                for j in 0..k {
+                    let v = coef[j][i] as f64 * self.scale;
+                    c[j] = if v.is_finite() { v } else { 0.0 };
+                }
+                let peak = c.iter().fold(0f64, |m, v| m.max(v.abs()));
+                if peak > MAX_RADIANCE {
+                    return Err(too_bright(path, x, y, peak));
+                }
+                let (Some(si), Some(sy)) = (self.sun_index, sun_y) else {
+                    texels.add(d, omega, &c);
+                    continue;
+                };
+                let a = c[si].max(0.0);
+                if a > 0.0 {
+                    sun.add(omega * a, &self.spectra[si], sy, d);
+                }
+                texels.seen.add(d, omega, &c);
+                c[si] = 0.0;
+                texels.light.add(d, omega, &c);
+            }
+        }
+        Ok((texels, sun))
+    }
+}
+
+/// The coefficient channels `k00`..`k{K-1}` of `layer`.
+fn k_channels(
+    path: &Path,
+    layer: &exr::image::Layer<exr::image::AnyChannels<exr::image::FlatSamples>>,
+    k: usize,
+) -> Result<Vec<Vec<f32>>> {
     let channel = |name: &str| -> Result<Vec<f32>> {
         layer
             .channel_data
@@ -521,91 +692,7 @@ pub fn load_basis_k(path: &Path) -> Result<(Lighting, EnvReport)> {
             .iter()
             .find(|c| c.name.to_string() == name)
             .map(|c| c.sample_data.values_as_f32().collect())
-            .ok_or_else(|| bad(format!("no channel {name} (specmap.basisK is {k})")))
+            .ok_or_else(|| bad(path, format!("no channel {name} (specmap.basisK is {k})")))
     };
-    let coef: Vec<Vec<f32>> = (0..k)
-        .map(|j| channel(&format!("k{j:02}")))
-        .collect::<Result<_>>()?;
-    let envmap = files::envmap_attr(&layer.attributes);
-    let geo = geometry(path, layout_of(path, w, h, envmap)?, w, h)?;
-    let mut texels = TexelPair::new(geo.used_pixels(), k);
-    let mut sun = SunSum {
-        spectrum: vec![0.0; wl.len()],
-        dir: [0.0; 3],
-    };
-    let sun_y = sun_index.map(|i| colour.luminance(&spectra[i as usize]));
-    let mut c = vec![0.0; k];
-    for y in 0..h {
-        for x in 0..w {
-            let (Some(d), omega) = (geo.direction(x, y), geo.solid_angle(x, y)) else {
-                continue;
-            };
-            let i = y * w + x;
-            for j in 0..k {
-                let v = coef[j][i] as f64 * scale;
-                c[j] = if v.is_finite() { v } else { 0.0 };
-            }
-            let peak = c.iter().fold(0f64, |m, v| m.max(v.abs()));
-            if peak > MAX_RADIANCE {
-                return Err(too_bright(path, x, y, peak));
-            }
-            if let (Some(si), Some(sy)) = (sun_index, sun_y) {
-                let si = si as usize;
-                let a = c[si].max(0.0);
-                if a > 0.0 {
-                    for (acc, b) in sun.spectrum.iter_mut().zip(&spectra[si]) {
-                        *acc += omega * a * b;
-                    }
-                    for (acc, dq) in sun.dir.iter_mut().zip(d) {
-                        *acc += omega * a * sy * dq;
-                    }
-                }
-                texels.seen.add(d, omega, &c);
-                c[si] = 0.0;
-                texels.light.add(d, omega, &c);
-                continue;
-            }
-            texels.add(d, omega, &c);
-        }
-    }
-    let coeffs = texels.pack(k, |s, out| out.copy_from_slice(s));
-    let sun = sun.light(&colour, &wl)?;
-    let light = match get("specmap.light") {
-        Some(AttrValue::Text(t)) => t,
-        _ => "the file's own spectra".into(),
-    };
-    let (sun_light, sun_spd, sun_label) = match &sun {
-        Some((s, spd)) => (Some(*s), spd.clone(), "the file's sun spectrum".to_string()),
-        None => (
-            None,
-            crate::data::spectrum(SUN_SPD)?.data,
-            "none".to_string(),
-        ),
-    };
-    let lighting = Lighting {
-        label: light.clone(),
-        spectra: LightSpectra::Own {
-            spectra: spectra
-                .into_iter()
-                .map(|s| Tabulated::new(wl.clone(), s))
-                .collect::<Result<_>>()?,
-            sun_spd,
-            sun_label: sun_label.clone(),
-        },
-        environment: Environment::Map(Arc::new(coeffs)),
-        sun: sun_light,
-    };
-    let report = EnvReport {
-        file: path.display().to_string(),
-        kind: "basis-k",
-        input_size: [w, h],
-        light,
-        light_used: false,
-        sun_spd: sun_label,
-        sun_direction: sun_light.map(|s| s.direction),
-        sun_irradiance: sun_light.map(|s| s.irradiance),
-        spectra: k,
-        projection: None,
-    };
-    Ok((lighting, report))
+    (0..k).map(|j| channel(&format!("k{j:02}"))).collect()
 }
