@@ -4,8 +4,8 @@
 //! directly (low bytes of every half sample, then high bytes), so no planar or interleaved copy
 //! of the block is ever made. The scratch buffers live in a [`BlockEncoder`], one per thread.
 
+use crate::envmap::files::layout::{Compression, HALF_MAX};
 use crate::envmap::files::zip::ZipEncoder;
-use crate::envmap::files::{Compression, HALF_MAX};
 use crate::error::{Error, Result};
 use exr::block::chunk::{Chunk, CompressedBlock, CompressedScanLineBlock};
 use exr::block::{BlockIndex, UncompressedBlock};
@@ -29,6 +29,7 @@ pub struct Interleaved<'a> {
 }
 
 impl LineSource for Interleaved<'_> {
+    /// Picks the channel's value out of each pixel of the row.
     fn line(&self, channel: usize, row: usize, out: &mut [f32]) {
         let start = row * self.width * self.per_pixel;
         let row = &self.rows[start..start + self.width * self.per_pixel];
@@ -69,6 +70,7 @@ pub struct BlockEncoder {
 }
 
 impl BlockEncoder {
+    /// Empty scratch and a ZIP compressor at `zip_level`.
     pub fn new(zip_level: u8) -> BlockEncoder {
         BlockEncoder {
             zip: ZipEncoder::new(zip_level),
@@ -89,15 +91,8 @@ impl BlockEncoder {
         block_y: usize,
         lines: usize,
     ) -> Result<Encoded> {
-        let w = f.width;
-        let bytes_per = if f.half { 2 } else { 4 };
-        let n = lines * f.file_order.len() * w * bytes_per;
-        self.line.resize(w, 0.0);
-        self.halves.resize(if f.half { w } else { 0 }, f16::ZERO);
-        self.bytes.resize(n, 0);
-        let zip = matches!(f.compression, Compression::Zip | Compression::Zips);
-        // The exr crate's compressors take native-endian samples; the file holds little-endian.
-        let native = !matches!(f.compression, Compression::None) && !zip;
+        let bytes = SampleBytes::of(f);
+        self.size_buffers(f, bytes, lines);
         let mut at = 0;
         for l in 0..lines {
             for (&c, &scale) in f.file_order.iter().zip(f.scales) {
@@ -106,47 +101,66 @@ impl BlockEncoder {
                 if scale != 1.0 {
                     self.line.iter_mut().for_each(|v| *v *= scale);
                 }
-                if f.half && zip {
-                    // The ZIP predictor's split: the low bytes of every sample in the first
-                    // half of the block, the high bytes in the second.
-                    self.halves.convert_from_f32_slice(&self.line);
-                    let (low, high) = self.bytes.split_at_mut(n / 2);
-                    for ((lo, hi), h) in low[at..at + w]
-                        .iter_mut()
-                        .zip(&mut high[at..at + w])
-                        .zip(&self.halves)
-                    {
-                        let b = h.to_bits();
-                        *lo = b as u8;
-                        *hi = (b >> 8) as u8;
-                    }
-                    at += w;
-                } else {
-                    let dst = &mut self.bytes[at..at + w * bytes_per];
-                    if f.half {
-                        self.halves.convert_from_f32_slice(&self.line);
-                        for (d, v) in dst.chunks_exact_mut(2).zip(&self.halves) {
-                            let b = if native {
-                                v.to_ne_bytes()
-                            } else {
-                                v.to_le_bytes()
-                            };
-                            d.copy_from_slice(&b);
-                        }
-                    } else {
-                        for (d, v) in dst.chunks_exact_mut(4).zip(&self.line) {
-                            let b = if native {
-                                v.to_ne_bytes()
-                            } else {
-                                v.to_le_bytes()
-                            };
-                            d.copy_from_slice(&b);
-                        }
-                    }
-                    at += w * bytes_per;
-                }
+                at = self.put_line(bytes, at);
             }
         }
+        self.compress(f, block_y, lines)
+    }
+
+    /// Sizes the scratch for a block of `lines` scan lines: one line as f32 (and as half), the
+    /// block's bytes.
+    fn size_buffers(&mut self, f: &BlockFormat, bytes: SampleBytes, lines: usize) {
+        let w = f.width;
+        self.line.resize(w, 0.0);
+        self.halves.resize(if f.half { w } else { 0 }, f16::ZERO);
+        self.bytes
+            .resize(lines * f.file_order.len() * w * bytes.size(), 0);
+    }
+
+    /// Lays the current scan line out at byte `at` of the block; the byte after it (for the
+    /// predictor's split: the sample after it in each half).
+    fn put_line(&mut self, bytes: SampleBytes, at: usize) -> usize {
+        let w = self.line.len();
+        match bytes {
+            SampleBytes::SplitHalves => {
+                // The ZIP predictor's split: the low bytes of every sample in the first half of
+                // the block, the high bytes in the second.
+                self.halves.convert_from_f32_slice(&self.line);
+                let half = self.bytes.len() / 2;
+                let (low, high) = self.bytes.split_at_mut(half);
+                for ((lo, hi), h) in low[at..at + w]
+                    .iter_mut()
+                    .zip(&mut high[at..at + w])
+                    .zip(&self.halves)
+                {
+                    let b = h.to_bits();
+                    *lo = b as u8;
+                    *hi = (b >> 8) as u8;
+                }
+                at + w
+            }
+            SampleBytes::Half { native } => {
+                self.halves.convert_from_f32_slice(&self.line);
+                let dst = &mut self.bytes[at..at + w * 2];
+                put_samples(
+                    dst,
+                    &self.halves,
+                    native,
+                    f16::to_ne_bytes,
+                    f16::to_le_bytes,
+                );
+                at + w * 2
+            }
+            SampleBytes::Float { native } => {
+                let dst = &mut self.bytes[at..at + w * 4];
+                put_samples(dst, &self.line, native, f32::to_ne_bytes, f32::to_le_bytes);
+                at + w * 4
+            }
+        }
+    }
+
+    /// Compresses the block's bytes into its chunk.
+    fn compress(&mut self, f: &BlockFormat, block_y: usize, lines: usize) -> Result<Encoded> {
         let index = block_y / f.lines_per_block;
         let compressed_pixels_le = match f.compression {
             // Handed over whole: the next block allocates its own.
@@ -190,6 +204,53 @@ impl BlockEncoder {
             ))
         })?;
         Ok((index, chunk))
+    }
+}
+
+/// Writes the values into `dst` one after another, each as its `N` bytes: native-endian
+/// (`ne`) or little-endian (`le`).
+fn put_samples<T: Copy, const N: usize>(
+    dst: &mut [u8],
+    values: &[T],
+    native: bool,
+    ne: impl Fn(T) -> [u8; N],
+    le: impl Fn(T) -> [u8; N],
+) {
+    for (d, &v) in dst.chunks_exact_mut(N).zip(values) {
+        d.copy_from_slice(&if native { ne(v) } else { le(v) });
+    }
+}
+
+/// How a block's samples are laid out as bytes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum SampleBytes {
+    /// Half samples for ZIP: the predictor's byte split (low bytes, then high bytes).
+    SplitHalves,
+    /// Half samples, native-endian for the `exr` crate's compressors, else little-endian.
+    Half { native: bool },
+    /// Float samples, native-endian for the `exr` crate's compressors, else little-endian.
+    Float { native: bool },
+}
+
+impl SampleBytes {
+    /// The layout the block's sample type and compression want.
+    fn of(f: &BlockFormat) -> SampleBytes {
+        let zip = matches!(f.compression, Compression::Zip | Compression::Zips);
+        // The exr crate's compressors take native-endian samples; the file holds little-endian.
+        let native = !matches!(f.compression, Compression::None) && !zip;
+        match (f.half, zip) {
+            (true, true) => SampleBytes::SplitHalves,
+            (true, false) => SampleBytes::Half { native },
+            (false, _) => SampleBytes::Float { native },
+        }
+    }
+
+    /// Bytes per sample.
+    fn size(self) -> usize {
+        match self {
+            SampleBytes::SplitHalves | SampleBytes::Half { .. } => 2,
+            SampleBytes::Float { .. } => 4,
+        }
     }
 }
 
