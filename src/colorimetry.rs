@@ -112,6 +112,24 @@ impl Cmfs {
     }
 
     /// XYZ of a light alone, normalised to Y = 100.
+    ///
+    /// D65's chromaticity is about (0.3127, 0.3290), its CCT about 6504 K:
+    ///
+    /// ```
+    /// use specmap::colorimetry::{cct, Cmfs, Observer};
+    /// use specmap::spectrum::{Interpolation, Rule, WavelengthGrid};
+    ///
+    /// let grid = WavelengthGrid::visible_1nm();
+    /// let cmfs = Cmfs::new(Observer::Cie1931, &grid)?;
+    /// let d65 = specmap::data::spectrum("D65")?.data.resample(&grid, Interpolation::LIGHT);
+    /// let xyz = cmfs.light_xyz(&d65, Rule::Riemann)?;
+    /// assert!((xyz.y() - 100.0).abs() < 1e-9);
+    /// let [x, y] = xyz.xy();
+    /// assert!((x - 0.3127).abs() < 5e-4 && (y - 0.3290).abs() < 5e-4, "{x} {y}");
+    /// let k = cct(xyz)?.kelvin.unwrap();
+    /// assert!((k - 6504.0).abs() < 15.0, "{k}");
+    /// # Ok::<(), specmap::Error>(())
+    /// ```
     pub fn light_xyz(&self, light: &Spectrum, rule: Rule) -> Result<Xyz> {
         let k = self.k(light, rule)?;
         let [x, y, z] = self.integrate(light, rule)?;
@@ -482,6 +500,17 @@ impl Lab {
 }
 
 /// CIEDE2000 colour difference (Sharma, Wu and Dalal 2005), kL = kC = kH = 1.
+///
+/// The first pair of Sharma, Wu and Dalal's test data:
+///
+/// ```
+/// use specmap::colorimetry::{delta_e_2000, Lab};
+///
+/// let a = Lab([50.0, 2.6772, -79.7751]);
+/// let b = Lab([50.0, 0.0, -82.7485]);
+/// assert!((delta_e_2000(a, b) - 2.0425).abs() < 1e-4);
+/// assert_eq!(delta_e_2000(a, a), 0.0);
+/// ```
 pub fn delta_e_2000(lab1: Lab, lab2: Lab) -> f64 {
     use std::f64::consts::PI;
     let [l1, a1, b1] = lab1.0;

@@ -97,6 +97,25 @@ impl Table {
     }
 
     /// Parses CSV text. `origin_path` names the file in error messages.
+    ///
+    /// ```
+    /// use specmap::data::{Origin, Table};
+    /// use std::path::Path;
+    ///
+    /// let text = "# a lamp\nwavelength_nm,power\n400,0.5\n500,1.0\n600,1.5\n";
+    /// let path = Path::new("lamp.csv");
+    /// let t = Table::parse_csv(text, "lamp", Origin::File(path.into()), path)?;
+    /// assert_eq!(t.columns(), ["power"]);
+    /// assert_eq!(t.wavelengths_nm(), [400.0, 500.0, 600.0]);
+    /// assert_eq!(t.column("power")?.values(), [0.5, 1.0, 1.5]);
+    ///
+    /// // Errors name the file and line.
+    /// let bad = "wavelength_nm,power\n400,x\n";
+    /// let e = Table::parse_csv(bad, "lamp", Origin::File(path.into()), path);
+    /// let message = e.unwrap_err().to_string();
+    /// assert!(message.contains("lamp.csv:2") && message.contains("'x' is not a number"));
+    /// # Ok::<(), specmap::Error>(())
+    /// ```
     pub fn parse_csv(text: &str, name: &str, origin: Origin, origin_path: &Path) -> Result<Table> {
         let err = CsvErrors { file: origin_path };
         let mut reader = csv_reader(text);
@@ -128,6 +147,18 @@ impl Table {
     }
 
     /// A built-in table by name (case-insensitive). Unknown names get the closest known ones.
+    ///
+    /// ```
+    /// use specmap::data::{Kind, Table};
+    ///
+    /// let chart = Table::builtin("colorchecker")?;
+    /// assert_eq!(chart.kind(), Some(Kind::Reflectance));
+    /// assert_eq!(chart.columns().len(), 24);
+    /// let red = chart.column("red")?; // a Tabulated spectrum at the table's wavelengths
+    /// assert!(red.values().iter().all(|r| (0.0..=1.0).contains(r)));
+    /// assert!(Table::builtin("D56").is_err()); // "did you mean D65, D55?"
+    /// # Ok::<(), specmap::Error>(())
+    /// ```
     pub fn builtin(name: &str) -> Result<Table> {
         let (kind, canonical, text) = BUILTIN
             .iter()
@@ -448,6 +479,14 @@ impl RowFields<'_> {
 }
 
 /// Resolves `TABLE`, `TABLE:COLUMN`, `PATH` or `PATH:COLUMN` to one spectrum.
+///
+/// ```
+/// let d65 = specmap::data::spectrum("d65")?;
+/// assert_eq!(d65.label, "D65");
+/// let red = specmap::data::spectrum("colorchecker:red")?;
+/// assert_eq!(red.label, "colorchecker:red");
+/// # Ok::<(), specmap::Error>(())
+/// ```
 pub fn spectrum(spec: &str) -> Result<NamedSpectrum> {
     if spec.trim().is_empty() {
         return Err(Error::invalid("an empty spectrum name"));

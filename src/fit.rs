@@ -396,6 +396,32 @@ fn lost_information(c: &Matrix3<f64>, light: &str) -> Option<String> {
 }
 
 /// Fits the basis weights (and the mode's coefficient matrix) for one light.
+///
+/// In the paper's mode RGB (1, 1, 1) comes back as itself (the weights are chosen for it); in
+/// the exact mode every colour does:
+///
+/// ```
+/// use specmap::colorimetry::{Observer, RgbSpace};
+/// use specmap::fit::{fit, FitInput, Mode, Upsampler, PAPER_BASIS};
+/// use specmap::spectrum::{Rule, WavelengthGrid};
+///
+/// let grid = WavelengthGrid::visible_1nm();
+/// let space = RgbSpace::SRGB;
+/// let (observer, rule) = (Observer::Cie1931, Rule::Riemann);
+/// let input = FitInput::from_names("A", PAPER_BASIS, &grid, observer, rule, space)?;
+///
+/// let paper = fit(&input, Mode::Paper)?;
+/// let up = Upsampler::new(&paper, &space);
+/// let white = up.rendered_rgb(up.coefficients([1.0, 1.0, 1.0]));
+/// assert!(white.iter().all(|v| (v - 1.0).abs() < 1e-9), "{white:?}");
+///
+/// let exact = fit(&input, Mode::Exact)?;
+/// let up = Upsampler::new(&exact, &space);
+/// let orange = [0.8, 0.4, 0.1];
+/// assert!(up.round_trip_error(orange, up.coefficients(orange)) < 1e-6);
+/// assert_eq!(up.spd(orange).len(), grid.len());
+/// # Ok::<(), specmap::Error>(())
+/// ```
 pub fn fit(input: &FitInput, mode: Mode) -> Result<Fit> {
     let grid = *input.light.grid();
     let system = LinearSystem::new(input)?;

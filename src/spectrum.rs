@@ -44,6 +44,18 @@ pub const MAX_SAMPLES: usize = 100_001;
 impl WavelengthGrid {
     /// The grid from `start_nm` to `end_nm` inclusive with the given step. The step must divide
     /// the range (to 1e-9 relative) and both ends must be finite and positive.
+    ///
+    /// ```
+    /// use specmap::spectrum::WavelengthGrid;
+    ///
+    /// let g = WavelengthGrid::new(380.0, 780.0, 5.0)?;
+    /// assert_eq!(g.len(), 81);
+    /// assert_eq!(g.wavelength_nm(1), 385.0);
+    /// assert_eq!(g.to_string(), "380:780:5");
+    /// assert_eq!("380:780:5".parse::<WavelengthGrid>()?, g);
+    /// assert!(WavelengthGrid::new(380.0, 780.0, 7.0).is_err()); // 7 nm does not divide 400 nm
+    /// # Ok::<(), specmap::Error>(())
+    /// ```
     pub fn new(start_nm: f64, end_nm: f64, step_nm: f64) -> Result<Self> {
         let (a, b, h) = (fmt_num(start_nm), fmt_num(end_nm), fmt_num(step_nm));
         if !(start_nm.is_finite() && end_nm.is_finite() && step_nm.is_finite()) {
@@ -253,6 +265,18 @@ impl Tabulated {
 
     /// Values on `grid`. Between samples: see [`Interpolation`]; outside the table's range the
     /// nearest end value is held constant (the CIE 167:2005 and colour-science convention).
+    ///
+    /// ```
+    /// use specmap::spectrum::{Interpolation, Rule, Tabulated, WavelengthGrid};
+    ///
+    /// let t = Tabulated::new(vec![400.0, 500.0, 600.0], vec![0.0, 1.0, 0.5])?;
+    /// let grid = WavelengthGrid::new(350.0, 650.0, 50.0)?;
+    /// let s = t.resample(&grid, Interpolation::LIGHT);
+    /// assert_eq!(s.values(), [0.0, 0.0, 0.5, 1.0, 0.75, 0.5, 0.5]); // ends held
+    /// // The trapezoid rule: 50 nm x (0/2 + 0 + 0.5 + 1 + 0.75 + 0.5 + 0.5/2).
+    /// assert!((s.integrate(Rule::Trapezoid) - 150.0).abs() < 1e-12);
+    /// # Ok::<(), specmap::Error>(())
+    /// ```
     pub fn resample(&self, grid: &WavelengthGrid, method: Interpolation) -> Spectrum {
         let interp = Interpolant::build(self, method);
         let (lo, hi) = self.range_nm();

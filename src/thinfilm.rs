@@ -1026,6 +1026,32 @@ impl Stack {
     /// R and T on `grid` in f64. With [`Coherence::Auto`], a layer whose fringe period
     /// `lambda^2 / (2 Re(n cos theta) d)` is below [`NYQUIST_SAMPLES`] grid steps at some
     /// wavelength is computed incoherently over the whole grid, and listed in the result.
+    ///
+    /// Bare glass (n 1.5) reflects `((n - 1) / (n + 1))^2 = 4%` at normal incidence; a
+    /// quarter-wave layer of MgF2 (n 1.38) on glass (n 1.52) brings that to
+    /// `((1.52 - 1.38^2) / (1.52 + 1.38^2))^2`, about 1.26%, at its design wavelength:
+    ///
+    /// ```
+    /// use specmap::spectrum::WavelengthGrid;
+    /// use specmap::thinfilm::{Coherence, Incidence, Index, Layer, Material, Polarization, Stack};
+    ///
+    /// let n = |v: f64| Ok::<_, specmap::Error>(Material::constant(Index::real(v)?));
+    /// let grid = WavelengthGrid::new(450.0, 650.0, 50.0)?; // 550 nm is sample 2
+    /// let normal = Incidence::degrees(0.0)?;
+    ///
+    /// let bare = Stack::new(n(1.0)?, vec![], n(1.5)?);
+    /// let r = bare.response(&grid, &normal, Polarization::Unpolarized, Coherence::Auto)?;
+    /// assert!((r.reflectance[2] - 0.04).abs() < 1e-12);
+    /// assert!((r.transmittance[2] - 0.96).abs() < 1e-12);
+    ///
+    /// let quarter_wave = Layer::new(n(1.38)?, 550.0 / (4.0 * 1.38))?;
+    /// let coated = Stack::new(n(1.0)?, vec![quarter_wave], n(1.52)?);
+    /// let r = coated.response(&grid, &normal, Polarization::Unpolarized, Coherence::Auto)?;
+    /// let expected = ((1.52 - 1.38f64.powi(2)) / (1.52 + 1.38f64.powi(2))).powi(2);
+    /// assert!((r.reflectance[2] - expected).abs() < 1e-12, "{}", r.reflectance[2]);
+    /// assert!(r.reflectance[0] > expected); // the minimum is at the design wavelength
+    /// # Ok::<(), specmap::Error>(())
+    /// ```
     pub fn response(
         &self,
         grid: &WavelengthGrid,

@@ -119,6 +119,25 @@ impl Quadrature {
     }
 
     /// A uniform grid and an integration rule: `w_i = h_i cmf(lambda_i)`.
+    ///
+    /// A perfect white under any light has Y = 100; the Y weights sum to the integral of ybar
+    /// (about 106.86 nm):
+    ///
+    /// ```
+    /// use specmap::colorimetry::Observer;
+    /// use specmap::quadrature::{Kind, Quadrature};
+    /// use specmap::spectrum::{Rule, WavelengthGrid};
+    ///
+    /// let grid = WavelengthGrid::new(380.0, 780.0, 5.0)?;
+    /// let q = Quadrature::uniform(grid, Rule::Riemann, Observer::Cie1931)?;
+    /// assert_eq!((q.kind(), q.len()), (Kind::Uniform, 81));
+    /// assert!((q.sum()[1] - 106.86).abs() < 0.05, "{:?}", q.sum());
+    ///
+    /// let light = vec![1.0; q.len()]; // equal energy, at the nodes
+    /// let white = q.relative_xyz(&light, &light).unwrap();
+    /// assert!((white.y() - 100.0).abs() < 1e-12);
+    /// # Ok::<(), specmap::Error>(())
+    /// ```
     pub fn uniform(grid: WavelengthGrid, rule: Rule, observer: Observer) -> Result<Quadrature> {
         let cmfs = Cmfs::new(observer, &grid)?;
         let h = rule.weights(grid.len(), grid.step_nm());
