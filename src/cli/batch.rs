@@ -5,8 +5,8 @@ use super::convert::ConvertOptionArgs;
 use super::outln;
 use anyhow::Context;
 use clap::Args;
-use specmap::batch::{self, Decision, Event, Manifest, Record, Shard, Status};
-use specmap::envmap::convert::OutputFormat;
+use specmap::batch::{self, Decision, Event, Manifest, Planned, Record, Shard, Status, Summary};
+use specmap::envmap::convert::{ConvertOptions, OutputFormat};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
@@ -60,7 +60,46 @@ pub(crate) struct BatchArgs {
     json: bool,
 }
 
+/// `specmap batch`: the options and folder checked, the inputs planned against the manifest;
+/// then the plan printed (`--dry-run`), or every map converted and the run summed up.
 pub(crate) fn run(a: BatchArgs) -> anyhow::Result<()> {
+    let opts = prepare(&a)?;
+    let work = plan_work(&a, &opts)?;
+    if a.dry_run {
+        super::emit(&dry_run_text(&work));
+        return Ok(());
+    }
+    let manifest = Manifest::open(&a.out_dir, a.shard)?;
+    let log = Log::new(work.planned.len(), a.quiet, &a.out_dir);
+    let summary = batch::run(
+        &work.planned,
+        &a.out_dir,
+        &opts,
+        &work.settings,
+        a.shard,
+        a.jobs as usize,
+        &manifest,
+        &|e| log.event(e),
+    )?;
+    log.finish();
+    if a.json {
+        super::emit(&(serde_json::to_string_pretty(&summary)? + "\n"));
+    } else if !a.quiet {
+        super::emit(&summary_text(&work.scope, &summary));
+    }
+    if summary.failed > 0 {
+        anyhow::bail!(
+            "{} of {} inputs failed (each error is above and in {})",
+            summary.failed,
+            summary.inputs,
+            summary.manifest
+        );
+    }
+    Ok(())
+}
+
+/// The conversion's options, checked with `--threads`' pool started and the output folder made.
+fn prepare(a: &BatchArgs) -> anyhow::Result<ConvertOptions> {
     if a.options.faces() {
         anyhow::bail!(
             "--in-layout faces: a batch converts one-file maps; convert six-face maps with \
@@ -81,6 +120,21 @@ pub(crate) fn run(a: BatchArgs) -> anyhow::Result<()> {
     guard.folder("--out-dir", &a.out_dir).check()?;
     std::fs::create_dir_all(&a.out_dir)
         .with_context(|| format!("--out-dir {}: creating the folder", a.out_dir.display()))?;
+    Ok(opts)
+}
+
+/// What this run does, before it does it.
+struct Work {
+    /// Each input of this shard, and whether it is converted or skipped.
+    planned: Vec<Planned>,
+    /// The hash of the conversion's settings.
+    settings: String,
+    /// How many inputs, in words (the shard, the duplicates).
+    scope: String,
+}
+
+/// The inputs expanded, this shard's kept, and each planned against the manifest's records.
+fn plan_work(a: &BatchArgs, opts: &ConvertOptions) -> anyhow::Result<Work> {
     let suffix = match opts.format {
         OutputFormat::Spectral => batch::OUTPUT_SUFFIX_SPECTRAL,
         OutputFormat::Basis => batch::OUTPUT_SUFFIX_BASIS,
@@ -91,7 +145,7 @@ pub(crate) fn run(a: BatchArgs) -> anyhow::Result<()> {
         Some(s) => s.select(expanded.items),
         None => expanded.items,
     };
-    let settings = batch::settings_hash(&opts)?;
+    let settings = batch::settings_hash(opts)?;
     let (records, unreadable) = Manifest::read_all(&a.out_dir)?;
     for line in &unreadable {
         eprintln!("warning: {line} is not a manifest record (a run cut short?): ignored");
@@ -109,63 +163,52 @@ pub(crate) fn run(a: BatchArgs) -> anyhow::Result<()> {
     } else {
         scope
     };
-    if a.dry_run {
-        let mut out = String::new();
-        for p in &planned {
-            let what = match &p.decision {
-                Decision::Convert(why) => format!("convert  ({why})"),
-                Decision::Skip(_) => "skip     (up to date)".into(),
-            };
-            outln!(
-                out,
-                "{what}  {} -> {}",
-                p.item.input.display(),
-                p.item.output.display()
-            );
-        }
-        outln!(out, "batch --dry-run: {scope}, settings {settings}");
-        super::emit(&out);
-        return Ok(());
-    }
-    let manifest = Manifest::open(&a.out_dir, a.shard)?;
-    let log = Log::new(planned.len(), a.quiet, &a.out_dir);
-    let summary = batch::run(
-        &planned,
-        &a.out_dir,
-        &opts,
-        &settings,
-        a.shard,
-        a.jobs as usize,
-        &manifest,
-        &|e| log.event(e),
-    )?;
-    log.finish();
-    if a.json {
-        super::emit(&(serde_json::to_string_pretty(&summary)? + "\n"));
-    } else if !a.quiet {
-        let mut out = String::new();
+    Ok(Work {
+        planned,
+        settings,
+        scope,
+    })
+}
+
+/// `--dry-run`: what each map needs and why, then the scope and settings.
+fn dry_run_text(work: &Work) -> String {
+    let mut out = String::new();
+    for p in &work.planned {
+        let what = match &p.decision {
+            Decision::Convert(why) => format!("convert  ({why})"),
+            Decision::Skip(_) => "skip     (up to date)".into(),
+        };
         outln!(
             out,
-            "batch: {scope}: {} converted, {} skipped, {} failed; {:.1} MB written in {:.1} s; \
-             manifest {}",
-            summary.converted,
-            summary.skipped,
-            summary.failed,
-            summary.bytes_written as f64 / 1e6,
-            summary.seconds,
-            summary.manifest
-        );
-        super::emit(&out);
-    }
-    if summary.failed > 0 {
-        anyhow::bail!(
-            "{} of {} inputs failed (each error is above and in {})",
-            summary.failed,
-            summary.inputs,
-            summary.manifest
+            "{what}  {} -> {}",
+            p.item.input.display(),
+            p.item.output.display()
         );
     }
-    Ok(())
+    outln!(
+        out,
+        "batch --dry-run: {}, settings {}",
+        work.scope,
+        work.settings
+    );
+    out
+}
+
+/// The run's one-line summary.
+fn summary_text(scope: &str, summary: &Summary) -> String {
+    let mut out = String::new();
+    outln!(
+        out,
+        "batch: {scope}: {} converted, {} skipped, {} failed; {:.1} MB written in {:.1} s; \
+         manifest {}",
+        summary.converted,
+        summary.skipped,
+        summary.failed,
+        summary.bytes_written as f64 / 1e6,
+        summary.seconds,
+        summary.manifest
+    );
+    out
 }
 
 /// The progress bar over files (and bytes written) on a terminal, a line per map otherwise;

@@ -154,6 +154,8 @@ fn list(json: bool) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// `specmap data show`: the plot's files checked, the table (or its column) read and resampled,
+/// the plot, then the values as CSV or JSON.
 fn show(a: ShowArgs) -> anyhow::Result<()> {
     if let Some(p) = &a.plot {
         super::guard::Guard::new()
@@ -161,10 +163,35 @@ fn show(a: ShowArgs) -> anyhow::Result<()> {
             .output("--plot", p)
             .check()?;
     }
-    // NAME is a whole table, or TABLE:COLUMN for one column.
-    let (table, only) = match Table::load(&a.name) {
+    let shown = read_shown(&a)?;
+    if let Some(path) = &a.plot {
+        write_plot(&a, &shown, path)?;
+    }
+    let report = match a.format {
+        Format::Csv => shown_csv(&shown),
+        Format::Json => serde_json::to_string_pretty(&shown_json(&a, &shown))? + "\n",
+    };
+    super::emit(&report);
+    Ok(())
+}
+
+/// The columns `data show` prints, on the wavelengths it prints them at.
+struct Shown {
+    table: Table,
+    /// The one column of TABLE:COLUMN.
+    only: Option<usize>,
+    /// Each column's name and table.
+    columns: Vec<(String, Tabulated)>,
+    wavelengths: Vec<f64>,
+    /// Each column's values at `wavelengths`.
+    values: Vec<Vec<f64>>,
+}
+
+/// NAME is a whole table, or TABLE:COLUMN for one column.
+fn table_of(name: &str) -> anyhow::Result<(Table, Option<usize>)> {
+    Ok(match Table::load(name) {
         Ok(t) => (t, None),
-        Err(whole_err) => match a.name.rsplit_once(':') {
+        Err(whole_err) => match name.rsplit_once(':') {
             Some((t, c)) if !t.is_empty() && !c.is_empty() => {
                 let t = Table::load(t)?;
                 let idx = t.column_index(c)?;
@@ -172,7 +199,12 @@ fn show(a: ShowArgs) -> anyhow::Result<()> {
             }
             _ => return Err(whole_err.into()),
         },
-    };
+    })
+}
+
+/// The table's columns, resampled onto `--range` (with `--interp`, else the kind's) if given.
+fn read_shown(a: &ShowArgs) -> anyhow::Result<Shown> {
+    let (table, only) = table_of(&a.name)?;
     let indices: Vec<usize> = match only {
         Some(i) => vec![i],
         None => (0..table.columns().len()).collect(),
@@ -198,77 +230,92 @@ fn show(a: ShowArgs) -> anyhow::Result<()> {
             None => t.values().to_vec(),
         })
         .collect();
+    Ok(Shown {
+        table,
+        only,
+        columns,
+        wavelengths,
+        values,
+    })
+}
 
-    if let Some(path) = &a.plot {
-        let colors = curve_colors(&table, &columns)?;
-        let series = columns
-            .iter()
-            .zip(&values)
-            .zip(colors)
-            .map(|(((name, _), v), color)| Series {
-                label: name.clone(),
-                points: wavelengths.iter().copied().zip(v.iter().copied()).collect(),
-                color,
-            })
-            .collect();
-        let y_label = match table.kind() {
-            Some(Kind::Reflectance) => "Reflectance",
-            Some(Kind::Cmf) => "Tristimulus value",
-            Some(_) => "Relative spectral power",
-            None => "Value",
-        };
-        let title = match only {
-            Some(i) => format!("{}:{}", table.name(), table.columns()[i]),
-            None => table.name().to_string(),
-        };
-        plot::write(
-            &Figure {
-                title,
-                x_label: "Wavelength (nm)".into(),
-                y_label: y_label.into(),
-                series,
-            },
-            path,
-        )
-        .with_context(|| format!("writing the plot of {}", a.name))?;
-        eprintln!("wrote {}", path.display());
-    }
-
-    match a.format {
-        Format::Csv => {
-            let mut out = String::from("wavelength_nm");
-            for (n, _) in &columns {
-                out.push(',');
-                out.push_str(n);
-            }
-            out.push('\n');
-            for (i, w) in wavelengths.iter().enumerate() {
-                out.push_str(&w.to_string());
-                for v in &values {
-                    out.push(',');
-                    out.push_str(&v[i].to_string());
-                }
-                out.push('\n');
-            }
-            super::emit(&out);
-        }
-        Format::Json => {
-            let cols: serde_json::Map<String, serde_json::Value> = columns
+/// `--plot`: every column against wavelength, titled and labelled by the table's kind.
+fn write_plot(a: &ShowArgs, s: &Shown, path: &std::path::Path) -> anyhow::Result<()> {
+    let colors = curve_colors(&s.table, &s.columns)?;
+    let series = s
+        .columns
+        .iter()
+        .zip(&s.values)
+        .zip(colors)
+        .map(|(((name, _), v), color)| Series {
+            label: name.clone(),
+            points: s
+                .wavelengths
                 .iter()
-                .zip(&values)
-                .map(|((n, _), v)| (n.clone(), serde_json::json!(v)))
-                .collect();
-            let doc = serde_json::json!({
-                "name": table.name(),
-                "kind": table.kind().map(|k| k.to_string()),
-                "range": a.range.map(|g| g.to_string()),
-                "wavelengths_nm": wavelengths,
-                "columns": cols,
-            });
-            super::emit(&(serde_json::to_string_pretty(&doc)? + "\n"));
-        }
-    }
+                .copied()
+                .zip(v.iter().copied())
+                .collect(),
+            color,
+        })
+        .collect();
+    let y_label = match s.table.kind() {
+        Some(Kind::Reflectance) => "Reflectance",
+        Some(Kind::Cmf) => "Tristimulus value",
+        Some(_) => "Relative spectral power",
+        None => "Value",
+    };
+    let title = match s.only {
+        Some(i) => format!("{}:{}", s.table.name(), s.table.columns()[i]),
+        None => s.table.name().to_string(),
+    };
+    plot::write(
+        &Figure {
+            title,
+            x_label: "Wavelength (nm)".into(),
+            y_label: y_label.into(),
+            series,
+        },
+        path,
+    )
+    .with_context(|| format!("writing the plot of {}", a.name))?;
+    eprintln!("wrote {}", path.display());
     Ok(())
+}
+
+/// `--format csv`: a `wavelength_nm` column and one per shown column.
+fn shown_csv(s: &Shown) -> String {
+    let mut out = String::from("wavelength_nm");
+    for (n, _) in &s.columns {
+        out.push(',');
+        out.push_str(n);
+    }
+    out.push('\n');
+    for (i, w) in s.wavelengths.iter().enumerate() {
+        out.push_str(&w.to_string());
+        for v in &s.values {
+            out.push(',');
+            out.push_str(&v[i].to_string());
+        }
+        out.push('\n');
+    }
+    out
+}
+
+/// `--format json`: the table's name and kind, the wavelengths and each column's values.
+fn shown_json(a: &ShowArgs, s: &Shown) -> serde_json::Value {
+    let cols: serde_json::Map<String, serde_json::Value> = s
+        .columns
+        .iter()
+        .zip(&s.values)
+        .map(|((n, _), v)| (n.clone(), serde_json::json!(v)))
+        .collect();
+    serde_json::json!({
+        "name": s.table.name(),
+        "kind": s.table.kind().map(|k| k.to_string()),
+        "range": a.range.map(|g| g.to_string()),
+        "wavelengths_nm": s.wavelengths,
+        "columns": cols,
+    })
 }
 
 /// Reflectances are drawn in their own colour under D65; CMFs as red/green/blue.

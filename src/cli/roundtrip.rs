@@ -5,7 +5,7 @@ use clap::{Args, ValueEnum};
 use specmap::envmap::roundtrip::heatmap::{
     caption, check_bounds, choose_range, write_heatmap, Scale,
 };
-use specmap::envmap::roundtrip::round_trip_file;
+use specmap::envmap::roundtrip::{round_trip_file, FileRoundTrip};
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -50,12 +50,38 @@ enum ScaleArg {
     Linear,
 }
 
+/// `specmap roundtrip`: the heatmap's bounds and the files checked, the file integrated back to
+/// RGB, the heatmap; then the statistics as JSON or text.
 pub(crate) fn run(a: RoundtripArgs) -> anyhow::Result<()> {
     let scale = match a.heatmap_scale {
         ScaleArg::Log => Scale::Log,
         ScaleArg::Linear => Scale::Linear,
     };
-    // Checked before any work: the bounds alone (the range itself needs the pixels).
+    check_options(&a, scale)?;
+    let mut de = Vec::new();
+    let r = round_trip_file(
+        &a.file,
+        a.observer.into(),
+        a.rule.into(),
+        a.heatmap.as_ref().map(|_| &mut de),
+    )?;
+    if let Some(path) = &a.heatmap {
+        let range = choose_range(&de, scale, a.heatmap_min, a.heatmap_max)?;
+        let drawn = write_heatmap(path, r.width, r.height, &de, &range)?;
+        let [range, counts] = caption(&drawn);
+        eprintln!("wrote {}: {range}; {counts}", path.display());
+    }
+    let report = match a.json {
+        true => serde_json::to_string_pretty(&r)? + "\n",
+        false => round_trip_report(&r),
+    };
+    super::emit(&report);
+    Ok(())
+}
+
+/// Checked before any work: the heatmap's bounds alone (the range itself needs the pixels), the
+/// file read and written, and the heatmap's PNG name.
+fn check_options(a: &RoundtripArgs, scale: Scale) -> anyhow::Result<()> {
     check_bounds(scale, a.heatmap_min, a.heatmap_max).map_err(|e| {
         anyhow::anyhow!(
             "--heatmap-min {} --heatmap-max {}: {e}",
@@ -81,23 +107,11 @@ pub(crate) fn run(a: RoundtripArgs) -> anyhow::Result<()> {
             );
         }
     }
-    let mut de = Vec::new();
-    let r = round_trip_file(
-        &a.file,
-        a.observer.into(),
-        a.rule.into(),
-        a.heatmap.as_ref().map(|_| &mut de),
-    )?;
-    if let Some(path) = &a.heatmap {
-        let range = choose_range(&de, scale, a.heatmap_min, a.heatmap_max)?;
-        let drawn = write_heatmap(path, r.width, r.height, &de, &range)?;
-        let [range, counts] = caption(&drawn);
-        eprintln!("wrote {}: {range}; {counts}", path.display());
-    }
-    if a.json {
-        super::emit(&(serde_json::to_string_pretty(&r)? + "\n"));
-        return Ok(());
-    }
+    Ok(())
+}
+
+/// The report without `--json`: the file, then CIEDE2000 over all pixels and without the sun.
+fn round_trip_report(r: &FileRoundTrip) -> String {
     let mut out = String::new();
     outln!(
         out,
@@ -130,6 +144,5 @@ pub(crate) fn run(a: RoundtripArgs) -> anyhow::Result<()> {
             r.non_finite_pixels
         );
     }
-    super::emit(&out);
-    Ok(())
+    out
 }

@@ -136,7 +136,33 @@ fn number(
     }
 }
 
+/// The controls beside the picture, top to bottom: the scene, the film and surfaces, the camera,
+/// the wavelengths, the integration, and the exports.
 fn controls(app: &mut App, ui: &mut egui::Ui) {
+    scene_controls(app, ui);
+    ui.separator();
+    ui.heading("Film");
+    film_layers(app, ui);
+    surface_controls(app, ui);
+    ui.separator();
+    ui.heading("Camera");
+    camera_controls(app, ui);
+    ui.separator();
+    wavelengths(app, ui);
+    choice(
+        ui,
+        app,
+        "rule",
+        "riemann",
+        &["riemann", "trapezoid", "simpson"],
+    );
+    choice(ui, app, "observer", "cie1931", &["cie1931", "cie1964"]);
+    ui.separator();
+    export_controls(app, ui);
+}
+
+/// The scene preset, the map, the light and the background.
+fn scene_controls(app: &mut App, ui: &mut egui::Ui) {
     ui.heading("Scene");
     let scene = app.settings.get("scene").unwrap_or("ball").to_string();
     egui::ComboBox::from_id_salt("scene")
@@ -165,8 +191,10 @@ fn controls(app: &mut App, ui: &mut egui::Ui) {
             }
         }
     });
-    ui.separator();
-    ui.heading("Film");
+}
+
+/// The film's layers: each one's index and thickness, removed, added, and the first swept.
+fn film_layers(app: &mut App, ui: &mut egui::Ui) {
     let mut layers = app.ui.layers.clone();
     let mut edited = false;
     let mut remove = None;
@@ -199,6 +227,10 @@ fn controls(app: &mut App, ui: &mut egui::Ui) {
     if edited {
         app.change(&[("film", film_text(&layers))]);
     }
+}
+
+/// The substrate, the pigment and the Phong coefficients.
+fn surface_controls(app: &mut App, ui: &mut egui::Ui) {
     text_option(ui, app, "substrate", "substrate", |u| &mut u.substrate);
     text_option(ui, app, "pigment", "diffuse", |u| &mut u.diffuse);
     let a = &app.args;
@@ -214,8 +246,10 @@ fn controls(app: &mut App, ui: &mut egui::Ui) {
         1.0..=10000.0,
         true,
     );
-    ui.separator();
-    ui.heading("Camera");
+}
+
+/// The orbit, the zoom, the exposure and the image size.
+fn camera_controls(app: &mut App, ui: &mut egui::Ui) {
     let [mut yaw, mut pitch] = app.ui.orbit;
     let c1 = ui
         .add(slider(&mut yaw, -180.0..=180.0).text("yaw"))
@@ -244,17 +278,10 @@ fn controls(app: &mut App, ui: &mut egui::Ui) {
             app.change(&[("size", (!v.is_empty()).then_some(v))]);
         }
     });
-    ui.separator();
-    wavelengths(app, ui);
-    choice(
-        ui,
-        app,
-        "rule",
-        "riemann",
-        &["riemann", "trapezoid", "simpson"],
-    );
-    choice(ui, app, "observer", "cie1931", &["cie1931", "cie1964"]);
-    ui.separator();
+}
+
+/// The command, PNG, EXR and window buttons, and the last command printed.
+fn export_controls(app: &mut App, ui: &mut egui::Ui) {
     ui.horizontal(|ui| {
         if ui.button("command (C)").clicked() {
             app.print_command();
