@@ -693,13 +693,9 @@ impl EnvMap {
         size: usize,
         orientation: &Orientation,
     ) -> EnvMap {
-        let m = orientation.to_map_matrix();
-        let at = |d: [f64; 3]| {
-            self.sample([
-                m[0][0] * d[0] + m[0][1] * d[1] + m[0][2] * d[2],
-                m[1][0] * d[0] + m[1][1] * d[1] + m[1][2] * d[2],
-                m[2][0] * d[0] + m[2][1] * d[1] + m[2][2] * d[2],
-            ])
+        let source = Oriented {
+            map: self,
+            m: orientation.to_map_matrix(),
         };
         let size = size.max(1);
         let (w, h) = layout.dimensions(size);
@@ -707,80 +703,15 @@ impl EnvMap {
             layout,
             image: RgbImage::new(w, h),
         };
-        let dst_used = dst.used_pixels().max(1) as f64;
-        let ratio = self.used_pixels() as f64 / dst_used;
-        let k = (ratio.sqrt().ceil() as usize).clamp(2, 64);
-        let kf = k as f64;
-        // Sub-sample offsets inside a pixel, and for a lat-long destination the sines and cosines
-        // of every sub-column's longitude (computed once, shared by all rows).
-        let offsets: Vec<f64> = (0..k).map(|a| (a as f64 + 0.5) / kf).collect();
-        let lon_trig: Vec<(f64, f64)> = match layout {
-            Layout::LatLong => (0..w * k)
-                .map(|c| (-2.0 * PI * ((c as f64 + 0.5) / (w * k) as f64 - 0.5)).sin_cos())
-                .collect(),
-            _ => Vec::new(),
-        };
+        let grid = SubSamples::new(self, &dst, size);
         let slots = layout.slots();
         dst.image
             .pixels
             .par_chunks_mut(w)
             .enumerate()
-            .for_each(|(y, row)| {
-                match slots {
-                    None => {
-                        // Sines and cosines of this row's sub-row latitudes: k values, on the
-                        // stack for k <= 64.
-                        let mut lat_trig = [(0.0f64, 0.0f64); 64];
-                        for (t, &fy) in lat_trig.iter_mut().zip(offsets.iter()) {
-                            *t = (-PI * ((y as f64 + fy) / h as f64 - 0.5)).sin_cos();
-                        }
-                        for (x, out) in row.iter_mut().enumerate() {
-                            let mut acc = [0.0f64; 3];
-                            let mut wsum = 0.0;
-                            for &(sl, cl) in &lat_trig[..k] {
-                                for &(so, co) in &lon_trig[x * k..(x + 1) * k] {
-                                    // Solid-angle density cos(latitude).
-                                    let v = at([so * cl, sl, co * cl]);
-                                    for c in 0..3 {
-                                        acc[c] += cl * v[c] as f64;
-                                    }
-                                    wsum += cl;
-                                }
-                            }
-                            *out = finish(acc, wsum);
-                        }
-                    }
-                    Some(slots) => {
-                        let n = size;
-                        let nf = n as f64;
-                        for (x, out) in row.iter_mut().enumerate() {
-                            let Some((face, s, i, j)) = locate(slots, n, x, y) else {
-                                continue;
-                            };
-                            let mut acc = [0.0f64; 3];
-                            let mut wsum = 0.0;
-                            for &fy in &offsets {
-                                for &fx in &offsets {
-                                    let d = face_dir(
-                                        face,
-                                        s,
-                                        (i as f64 + fx) / nf,
-                                        (j as f64 + fy) / nf,
-                                    );
-                                    let r2 = dot(d, d);
-                                    // Solid-angle density 1/r^3 on the face plane.
-                                    let wt = 1.0 / (r2 * r2.sqrt());
-                                    let v = at(d);
-                                    for c in 0..3 {
-                                        acc[c] += wt * v[c] as f64;
-                                    }
-                                    wsum += wt;
-                                }
-                            }
-                            *out = finish(acc, wsum);
-                        }
-                    }
-                }
+            .for_each(|(y, row)| match slots {
+                None => grid.latlong_row(&source, y, row),
+                Some(slots) => grid.cube_row(&source, slots, y, row),
             });
         dst
     }
@@ -797,6 +728,123 @@ impl EnvMap {
                     .map(|d| (x, y, d, self.solid_angle(x, y), self.pixel(x, y)))
             })
         })
+    }
+}
+
+/// A map seen through an orientation: world directions in, the map's values out.
+struct Oriented<'a> {
+    map: &'a EnvMap,
+    /// World to map directions.
+    m: [[f64; 3]; 3],
+}
+
+impl Oriented<'_> {
+    /// The map's value in world direction `d`.
+    fn at(&self, d: [f64; 3]) -> [f32; 3] {
+        let m = &self.m;
+        self.map.sample([
+            m[0][0] * d[0] + m[0][1] * d[1] + m[0][2] * d[2],
+            m[1][0] * d[0] + m[1][1] * d[1] + m[1][2] * d[2],
+            m[2][0] * d[0] + m[2][1] * d[1] + m[2][2] * d[2],
+        ])
+    }
+}
+
+/// The k x k stratified sub-samples of a resampling's destination pixels.
+struct SubSamples {
+    k: usize,
+    /// Sub-sample offsets inside a pixel.
+    offsets: Vec<f64>,
+    /// For a lat-long destination, the sines and cosines of every sub-column's longitude
+    /// (computed once, shared by all rows); empty otherwise.
+    lon_trig: Vec<(f64, f64)>,
+    /// The destination's lat-long height or face size.
+    size: usize,
+    /// The destination's height.
+    height: usize,
+}
+
+impl SubSamples {
+    /// k is the square root of the source-to-destination pixel ratio rounded up (at least 2, at
+    /// most 64).
+    fn new(src: &EnvMap, dst: &EnvMap, size: usize) -> SubSamples {
+        let (w, h) = (dst.image.width, dst.image.height);
+        let dst_used = dst.used_pixels().max(1) as f64;
+        let ratio = src.used_pixels() as f64 / dst_used;
+        let k = (ratio.sqrt().ceil() as usize).clamp(2, 64);
+        let kf = k as f64;
+        let offsets: Vec<f64> = (0..k).map(|a| (a as f64 + 0.5) / kf).collect();
+        let lon_trig: Vec<(f64, f64)> = match dst.layout {
+            Layout::LatLong => (0..w * k)
+                .map(|c| (-2.0 * PI * ((c as f64 + 0.5) / (w * k) as f64 - 0.5)).sin_cos())
+                .collect(),
+            _ => Vec::new(),
+        };
+        SubSamples {
+            k,
+            offsets,
+            lon_trig,
+            size,
+            height: h,
+        }
+    }
+
+    /// Row `y` of a lat-long destination, each pixel weighted by the solid-angle density
+    /// cos(latitude).
+    fn latlong_row(&self, source: &Oriented, y: usize, row: &mut [[f32; 3]]) {
+        let k = self.k;
+        // Sines and cosines of this row's sub-row latitudes: k values, on the stack for k <= 64.
+        let mut lat_trig = [(0.0f64, 0.0f64); 64];
+        for (t, &fy) in lat_trig.iter_mut().zip(self.offsets.iter()) {
+            *t = (-PI * ((y as f64 + fy) / self.height as f64 - 0.5)).sin_cos();
+        }
+        for (x, out) in row.iter_mut().enumerate() {
+            let mut acc = [0.0f64; 3];
+            let mut wsum = 0.0;
+            for &(sl, cl) in &lat_trig[..k] {
+                for &(so, co) in &self.lon_trig[x * k..(x + 1) * k] {
+                    // Solid-angle density cos(latitude).
+                    let v = source.at([so * cl, sl, co * cl]);
+                    for c in 0..3 {
+                        acc[c] += cl * v[c] as f64;
+                    }
+                    wsum += cl;
+                }
+            }
+            *out = finish(acc, wsum);
+        }
+    }
+
+    /// Row `y` of a cube-like destination; the unused cells of a cross stay black.
+    fn cube_row(&self, source: &Oriented, slots: &[Slot; 6], y: usize, row: &mut [[f32; 3]]) {
+        for (x, out) in row.iter_mut().enumerate() {
+            let Some((face, s, i, j)) = locate(slots, self.size, x, y) else {
+                continue;
+            };
+            *out = self.face_pixel(source, face, s, i, j);
+        }
+    }
+
+    /// Pixel (i, j) of a destination face, each sub-sample weighted by the solid-angle density
+    /// 1/r^3 on the face plane.
+    fn face_pixel(&self, source: &Oriented, face: Face, s: &Slot, i: usize, j: usize) -> [f32; 3] {
+        let nf = self.size as f64;
+        let mut acc = [0.0f64; 3];
+        let mut wsum = 0.0;
+        for &fy in &self.offsets {
+            for &fx in &self.offsets {
+                let d = face_dir(face, s, (i as f64 + fx) / nf, (j as f64 + fy) / nf);
+                let r2 = dot(d, d);
+                // Solid-angle density 1/r^3 on the face plane.
+                let wt = 1.0 / (r2 * r2.sqrt());
+                let v = source.at(d);
+                for c in 0..3 {
+                    acc[c] += wt * v[c] as f64;
+                }
+                wsum += wt;
+            }
+        }
+        finish(acc, wsum)
     }
 }
 

@@ -181,8 +181,8 @@ impl Integration {
     /// The XYZ of a pixel's bands (the first `weights.len()` values of `p`).
     fn xyz(&self, p: &[f32]) -> nalgebra::Vector3<f64> {
         let (mut xx, mut yy, mut zz) = (0.0, 0.0, 0.0);
-        for i in 0..self.weights.len() {
-            let v = p[i] as f64 * self.weights[i];
+        for (i, &value) in p[..self.weights.len()].iter().enumerate() {
+            let v = value as f64 * self.weights[i];
             xx += v * self.xb[i];
             yy += v * self.yb[i];
             zz += v * self.zb[i];

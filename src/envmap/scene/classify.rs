@@ -160,14 +160,8 @@ pub fn classify(
             .push(sun_light(cells, levels, &candidates[k], settings)?);
     }
     let mut sky_cells = daylight_lights(cells, levels, &candidates, &daylight, &dim, &mut out)?;
-    // The sun's glow above the horizon, where daylight-coloured, is circumsolar sky.
     if let (Some(k), false) = (sun_index, sky_cells.is_empty()) {
-        let sun_cells = &out.lights[0].cells;
-        sky_cells.extend(candidates[k].e.cells.iter().copied().filter(|i| {
-            sun_cells.binary_search(i).is_err()
-                && cells.direction(*i)[1] > 0.0
-                && daylight_coloured(&cells.xyz(*i))
-        }));
+        add_circumsolar_sky(cells, &out.lights[0].cells, &candidates[k], &mut sky_cells);
     }
     for &(k, _) in &daylight {
         taken[k] = true;
@@ -192,20 +186,40 @@ pub fn classify(
         &mut out,
     )?;
     if !sky_cells.is_empty() {
-        sky_cells.sort_unstable();
-        let light = daylight_light(
-            cells,
-            levels,
-            sky_cells,
-            LightKind::Sky,
-            "daylight-coloured, in the upper hemisphere, reaching high or wide".into(),
-        )?;
+        let light = sky_light(cells, levels, sky_cells)?;
         out.lights.insert(sun_index.is_some() as usize, light);
     }
     if let (Err(why), Some(_)) = (&sun, candidates.first()) {
         out.bright_reflectors.insert(0, format!("no sun: {why}"));
     }
     Ok(out)
+}
+
+/// The sun's glow above the horizon, where daylight-coloured, is circumsolar sky: the cells of
+/// the sun's emitter outside its core (`sun_cells`, sorted) join `sky_cells`.
+fn add_circumsolar_sky(
+    cells: &Cells,
+    sun_cells: &[usize],
+    sun: &Candidate,
+    sky_cells: &mut Vec<usize>,
+) {
+    sky_cells.extend(sun.e.cells.iter().copied().filter(|i| {
+        sun_cells.binary_search(i).is_err()
+            && cells.direction(*i)[1] > 0.0
+            && daylight_coloured(&cells.xyz(*i))
+    }));
+}
+
+/// All the sky's cells as one light.
+fn sky_light(cells: &Cells, levels: &Levels, mut sky_cells: Vec<usize>) -> Result<Light> {
+    sky_cells.sort_unstable();
+    daylight_light(
+        cells,
+        levels,
+        sky_cells,
+        LightKind::Sky,
+        "daylight-coloured, in the upper hemisphere, reaching high or wide".into(),
+    )
 }
 
 /// The luminance of the sky's and windows' bright parts: the 95th percentile of their cells.

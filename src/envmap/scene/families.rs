@@ -187,6 +187,38 @@ type Near = (String, Family, u8, f64);
 /// most common near fluorescent; a compact source between 2400 and 3600 K on the locus is a
 /// filament; a compact one near a white LED is the most common such LED; otherwise the nearest.
 pub fn match_lamp(uv: [f64; 2], cct_k: Option<f64>, elongation: f64) -> Result<LampMatch> {
+    let found = whites_by_distance(uv, cct_k);
+    let best = found[0].3;
+    let near: Vec<&Near> = found
+        .iter()
+        .filter(|f| f.3 <= best + AMBIGUITY_UV)
+        .collect();
+    let strip = elongation >= STRIP_ELONGATION;
+    let (chosen, why) = match same_white(&near) {
+        Some(f) => (f, "its white, within a just noticeable difference"),
+        None => by_shape(&near, cct_k, strip),
+    };
+    let (chosen, why) = match triphosphor_instead(&found, chosen, strip) {
+        Some(t) => (t, TRIPHOSPHOR_WHY),
+        None => (chosen, why),
+    };
+    Ok(LampMatch {
+        spd: chosen.0.clone(),
+        family: chosen.1,
+        distance_uv: chosen.3,
+        nearest_uv: best,
+        why: why.to_string(),
+        alternatives: near
+            .iter()
+            .filter(|f| f.0 != chosen.0)
+            .map(|f| (f.0.clone(), f.3))
+            .collect(),
+    })
+}
+
+/// The catalogue's whites (and, given a CCT, the Planckian one of that CCT within the
+/// filaments' range), nearest to `uv` first.
+fn whites_by_distance(uv: [f64; 2], cct_k: Option<f64>) -> Vec<Near> {
     let dist = |a: [f64; 2]| (a[0] - uv[0]).hypot(a[1] - uv[1]);
     let mut found: Vec<Near> = entries()
         .iter()
@@ -203,23 +235,27 @@ pub fn match_lamp(uv: [f64; 2], cct_k: Option<f64>, elongation: f64) -> Result<L
         found.push(planck);
     }
     found.sort_by(|a, b| a.3.total_cmp(&b.3));
-    let best = found[0].3;
-    let near: Vec<&Near> = found
+    found
+}
+
+/// A colour within a just noticeable difference of a table's white is that table, unless
+/// tables of other families are as near, or the filaments' Planckian locus (a continuum
+/// every warm white is near).
+fn same_white<'a>(near: &[&'a Near]) -> Option<&'a Near> {
+    let on_locus = near
         .iter()
-        .filter(|f| f.3 <= best + AMBIGUITY_UV)
-        .collect();
-    // The most common of a family among the near whites, then the nearest.
-    let pick = |family: Family| {
-        near.iter()
-            .filter(|f| f.1 == family)
-            .min_by(|a, b| {
-                (a.2, a.3)
-                    .partial_cmp(&(b.2, b.3))
-                    .expect("finite distances")
-            })
-            .copied()
-    };
-    let strip = elongation >= STRIP_ELONGATION;
+        .any(|f| f.1 == Family::Incandescent && f.3 <= SAME_WHITE_UV);
+    let within: Vec<&&Near> = near.iter().filter(|f| f.3 <= SAME_WHITE_UV).collect();
+    let one_family = within.iter().all(|f| f.1 == within[0].1);
+    within
+        .first()
+        .filter(|f| f.1 != Family::Incandescent && one_family && !on_locus)
+        .map(|&&f| f)
+}
+
+/// The white the lamp's shape and CCT choose among the near ones, and why: the first rule
+/// that applies and has a near white of its family, else the nearest.
+fn by_shape<'a>(near: &[&'a Near], cct_k: Option<f64>, strip: bool) -> (&'a Near, &'static str) {
     let k = cct_k.unwrap_or(f64::NAN);
     let filament = (FILAMENT_PREFERRED_K.0..=FILAMENT_PREFERRED_K.1).contains(&k);
     let rules: [(bool, Family, &str); 4] = [
@@ -244,44 +280,27 @@ pub fn match_lamp(uv: [f64; 2], cct_k: Option<f64>, elongation: f64) -> Result<L
             "compact: the most common near white LED",
         ),
     ];
-    // A colour within a just noticeable difference of a table's white is that table, unless
-    // tables of other families are as near, or the filaments' Planckian locus (a continuum
-    // every warm white is near).
-    let on_locus = near
+    rules
         .iter()
-        .any(|f| f.1 == Family::Incandescent && f.3 <= SAME_WHITE_UV);
-    let within: Vec<&&Near> = near.iter().filter(|f| f.3 <= SAME_WHITE_UV).collect();
-    let one_family = within.iter().all(|f| f.1 == within[0].1);
-    let same = within
-        .first()
-        .filter(|f| f.1 != Family::Incandescent && one_family && !on_locus)
-        .copied();
-    let (chosen, why) = if let Some(&f) = same {
-        (f, "its white, within a just noticeable difference")
-    } else {
-        rules
-            .iter()
-            .find_map(|&(applies, family, why)| {
-                applies.then(|| pick(family)).flatten().map(|f| (f, why))
-            })
-            .unwrap_or((near[0], "the nearest white"))
-    };
-    let (chosen, why) = match triphosphor_instead(&found, chosen, strip) {
-        Some(t) => (t, TRIPHOSPHOR_WHY),
-        None => (chosen, why),
-    };
-    Ok(LampMatch {
-        spd: chosen.0.clone(),
-        family: chosen.1,
-        distance_uv: chosen.3,
-        nearest_uv: best,
-        why: why.to_string(),
-        alternatives: near
-            .iter()
-            .filter(|f| f.0 != chosen.0)
-            .map(|f| (f.0.clone(), f.3))
-            .collect(),
-    })
+        .find_map(|&(applies, family, why)| {
+            applies
+                .then(|| most_common(near, family))
+                .flatten()
+                .map(|f| (f, why))
+        })
+        .unwrap_or((near[0], "the nearest white"))
+}
+
+/// The most common of a family among the near whites, then the nearest.
+fn most_common<'a>(near: &[&'a Near], family: Family) -> Option<&'a Near> {
+    near.iter()
+        .filter(|f| f.1 == family)
+        .min_by(|a, b| {
+            (a.2, a.3)
+                .partial_cmp(&(b.2, b.3))
+                .expect("finite distances")
+        })
+        .copied()
 }
 
 /// Why a strip took a triphosphor table over a halophosphate one of its white.

@@ -86,17 +86,49 @@ impl SunSearch {
 
 /// Finds the sun of `map` (linear RGB in `space`), if it has one.
 pub fn find_sun(map: &EnvMap, space: &RgbSpace, settings: &SunSettings) -> SunSearch {
-    let img = &map.image;
-    let m = space.to_xyz_matrix();
-    let luminance = |p: [f32; 3]| -> f64 {
-        (m[(1, 0)] * p[0] as f64 + m[(1, 1)] * p[1] as f64 + m[(1, 2)] * p[2] as f64).max(0.0)
+    let luminance = Luminance(space.to_xyz_matrix());
+    let (total, (peak_l, peak_i)) = energy_and_peak(map, &luminance);
+    if total.is_nan() || total <= 0.0 || peak_i == usize::MAX {
+        return SunSearch::NotFound {
+            reason: "the map holds no light".into(),
+        };
+    }
+    let width = map.image.width;
+    let Some(peak_dir) = map.direction(peak_i % width, peak_i / width) else {
+        return SunSearch::NotFound {
+            reason: "the brightest pixel has no direction".into(),
+        };
     };
+    let threshold = settings.peak_fraction * peak_l;
+    let region = Region::around(map, &luminance, peak_dir, threshold, settings);
+    let share = region.energy / total;
+    match region.why_not_a_sun(share, peak_l, settings) {
+        Some(reason) => SunSearch::NotFound { reason },
+        None => SunSearch::Found(region.into_sun(map, space, share, peak_l)),
+    }
+}
+
+/// A space's RGB-to-XYZ matrix, for the luminance (its Y row) of a pixel.
+struct Luminance(nalgebra::Matrix3<f64>);
+
+impl Luminance {
+    /// The luminance of linear RGB `p`, negative values taken as 0.
+    fn of(&self, p: [f32; 3]) -> f64 {
+        let m = &self.0;
+        (m[(1, 0)] * p[0] as f64 + m[(1, 1)] * p[1] as f64 + m[(1, 2)] * p[2] as f64).max(0.0)
+    }
+}
+
+/// The map's energy (luminance x solid angle) and its brightest pixel (luminance, index;
+/// `usize::MAX` when none is lit), over the pixels of a direction and a finite luminance.
+fn energy_and_peak(map: &EnvMap, luminance: &Luminance) -> (f64, (f64, usize)) {
+    let img = &map.image;
     let mut total = 0.0;
     let mut peak = (0.0f64, usize::MAX);
     for y in 0..img.height {
         for x in 0..img.width {
             let i = y * img.width + x;
-            let l = luminance(img.pixels[i]);
+            let l = luminance.of(img.pixels[i]);
             let omega = map.solid_angle(x, y);
             if omega <= 0.0 || !l.is_finite() {
                 continue;
@@ -107,91 +139,119 @@ pub fn find_sun(map: &EnvMap, space: &RgbSpace, settings: &SunSettings) -> SunSe
             }
         }
     }
-    if total.is_nan() || total <= 0.0 || peak.1 == usize::MAX {
-        return SunSearch::NotFound {
-            reason: "the map holds no light".into(),
+    (total, peak)
+}
+
+/// The brightest region: its pixels and their sums.
+struct Region {
+    pixels: Vec<usize>,
+    /// Sum of luminance x solid angle.
+    energy: f64,
+    omega_sum: f64,
+    /// Energy-weighted sum of the directions.
+    dir_sum: [f64; 3],
+    /// Solid-angle-weighted sum of the RGB values.
+    rgb_sum: [f64; 3],
+}
+
+impl Region {
+    /// The pixels of at least `threshold` luminance within the settings' radius of `peak_dir`.
+    fn around(
+        map: &EnvMap,
+        luminance: &Luminance,
+        peak_dir: [f64; 3],
+        threshold: f64,
+        settings: &SunSettings,
+    ) -> Region {
+        let img = &map.image;
+        let cos_max = settings.max_radius_deg.to_radians().cos();
+        let mut region = Region {
+            pixels: Vec::new(),
+            energy: 0.0,
+            omega_sum: 0.0,
+            dir_sum: [0.0f64; 3],
+            rgb_sum: [0.0f64; 3],
         };
-    }
-    let (peak_l, peak_i) = peak;
-    let peak_dir = match map.direction(peak_i % img.width, peak_i / img.width) {
-        Some(d) => d,
-        None => {
-            return SunSearch::NotFound {
-                reason: "the brightest pixel has no direction".into(),
+        for y in 0..img.height {
+            for x in 0..img.width {
+                let i = y * img.width + x;
+                let p = img.pixels[i];
+                let l = luminance.of(p);
+                if l < threshold {
+                    continue;
+                }
+                let Some(d) = map.direction(x, y) else {
+                    continue;
+                };
+                if d[0] * peak_dir[0] + d[1] * peak_dir[1] + d[2] * peak_dir[2] < cos_max {
+                    continue;
+                }
+                region.add(i, l, map.solid_angle(x, y), d, p);
             }
         }
-    };
-    let cos_max = settings.max_radius_deg.to_radians().cos();
-    let threshold = settings.peak_fraction * peak_l;
-    let mut pixels = Vec::new();
-    let (mut energy, mut omega_sum) = (0.0, 0.0);
-    let mut dir_sum = [0.0f64; 3];
-    let mut rgb_sum = [0.0f64; 3];
-    for y in 0..img.height {
-        for x in 0..img.width {
-            let i = y * img.width + x;
-            let p = img.pixels[i];
-            let l = luminance(p);
-            if l < threshold {
-                continue;
-            }
-            let Some(d) = map.direction(x, y) else {
-                continue;
-            };
-            if d[0] * peak_dir[0] + d[1] * peak_dir[1] + d[2] * peak_dir[2] < cos_max {
-                continue;
-            }
-            let omega = map.solid_angle(x, y);
-            let e = l * omega;
-            pixels.push(i);
-            energy += e;
-            omega_sum += omega;
-            for k in 0..3 {
-                dir_sum[k] += e * d[k];
-                rgb_sum[k] += omega * p[k] as f64;
-            }
+        region
+    }
+
+    /// Adds pixel `i` of luminance `l`, solid angle `omega`, direction `d` and value `p`.
+    fn add(&mut self, i: usize, l: f64, omega: f64, d: [f64; 3], p: [f32; 3]) {
+        let e = l * omega;
+        self.pixels.push(i);
+        self.energy += e;
+        self.omega_sum += omega;
+        for k in 0..3 {
+            self.dir_sum[k] += e * d[k];
+            self.rgb_sum[k] += omega * p[k] as f64;
         }
     }
-    let share = energy / total;
-    if omega_sum > settings.max_solid_angle_sr || share < settings.min_energy_share {
-        return SunSearch::NotFound {
-            reason: format!(
+
+    /// Why the region, carrying `share` of the energy, is not a sun; None when it is one.
+    fn why_not_a_sun(&self, share: f64, peak_l: f64, settings: &SunSettings) -> Option<String> {
+        let rejected =
+            self.omega_sum > settings.max_solid_angle_sr || share < settings.min_energy_share;
+        rejected.then(|| {
+            format!(
                 "the brightest region ({} pixels, {:.2e} sr, peak luminance {:.3}) carries {:.1}% \
                  of the energy; a sun covers at most {:.2e} sr and carries at least {:.0}%",
-                pixels.len(),
-                omega_sum,
+                self.pixels.len(),
+                self.omega_sum,
                 peak_l,
                 100.0 * share,
                 settings.max_solid_angle_sr,
                 100.0 * settings.min_energy_share
-            ),
-        };
+            )
+        })
     }
-    let norm = (dir_sum[0].powi(2) + dir_sum[1].powi(2) + dir_sum[2].powi(2)).sqrt();
-    let direction = dir_sum.map(|v| v / norm);
-    let mean_rgb = rgb_sum.map(|v| v / omega_sum);
-    let xyz = space.xyz_from_rgb(mean_rgb);
-    let cct = cct(xyz).unwrap_or(Cct {
-        kelvin: None,
-        duv: f64::NAN,
-    });
-    let max_channel = pixels
-        .iter()
-        .flat_map(|&i| img.pixels[i])
-        .fold(0.0f32, f32::max);
-    SunSearch::Found(Sun {
-        pixel_count: pixels.len(),
-        pixels,
-        direction,
-        elevation_deg: direction[1].clamp(-1.0, 1.0).asin().to_degrees(),
-        azimuth_deg: direction[0].atan2(direction[2]).to_degrees(),
-        solid_angle_sr: omega_sum,
-        energy_share: share,
-        mean_rgb,
-        peak_luminance: peak_l,
-        cct,
-        clipped: max_channel >= 65000.0,
-    })
+
+    /// The sun this region is: its direction, colour and whether it was clipped.
+    fn into_sun(self, map: &EnvMap, space: &RgbSpace, share: f64, peak_l: f64) -> Sun {
+        let dir_sum = self.dir_sum;
+        let norm = (dir_sum[0].powi(2) + dir_sum[1].powi(2) + dir_sum[2].powi(2)).sqrt();
+        let direction = dir_sum.map(|v| v / norm);
+        let mean_rgb = self.rgb_sum.map(|v| v / self.omega_sum);
+        let xyz = space.xyz_from_rgb(mean_rgb);
+        let cct = cct(xyz).unwrap_or(Cct {
+            kelvin: None,
+            duv: f64::NAN,
+        });
+        let max_channel = self
+            .pixels
+            .iter()
+            .flat_map(|&i| map.image.pixels[i])
+            .fold(0.0f32, f32::max);
+        Sun {
+            pixel_count: self.pixels.len(),
+            pixels: self.pixels,
+            direction,
+            elevation_deg: direction[1].clamp(-1.0, 1.0).asin().to_degrees(),
+            azimuth_deg: direction[0].atan2(direction[2]).to_degrees(),
+            solid_angle_sr: self.omega_sum,
+            energy_share: share,
+            mean_rgb,
+            peak_luminance: peak_l,
+            cct,
+            clipped: max_channel >= 65000.0,
+        }
+    }
 }
 
 #[cfg(test)]
