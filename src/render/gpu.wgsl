@@ -63,7 +63,7 @@ struct Lighting {
 @group(0) @binding(5) var<storage, read> maps: array<vec4<u32>>;
 @group(0) @binding(6) var<storage, read> texels: array<vec4<f32>>;
 @group(0) @binding(7) var<storage, read_write> out_rgb: array<vec4<f32>>;
-// Per pixel row and band of BAND pixels, the objects it can hit (rows.rs): height * bands + 1
+// Per pixel row and band of BAND pixels, the objects it can hit (candidates.rs): height * bands + 1
 // offsets, then object indices.
 @group(0) @binding(8) var<storage, read> rows: array<u32>;
 
@@ -78,10 +78,10 @@ const HAS_DIFFUSE: u32 = 4u;
 const HIDE_BACKGROUND: u32 = 1u;
 // The most groups of four coefficients a texel holds (prepare.rs: MAX_GROUPS).
 const MAX_GROUPS: u32 = 8u;
-// Pixels per band of the object index (rows.rs: BAND).
+// Pixels per band of the object index (candidates.rs: BAND).
 const BAND: u32 = 8u;
 
-// ---- environment maps (env.rs: sample) -------------------------------------------------------
+// ---- environment maps (latlong.rs: sample) ---------------------------------------------------
 
 // The four texels around a direction and their bilinear weights.
 struct Taps {
@@ -94,7 +94,7 @@ fn taps(map: u32, dir: vec3<f32>) -> Taps {
     let w = m.y;
     let h = m.z;
     var t: Taps;
-    // A uniform lighting's maps are one texel: no direction to look up (env.rs: bilinear).
+    // A uniform lighting's maps are one texel: no direction to look up (latlong.rs: bilinear).
     if (w * h == 1u) {
         t.idx = vec4<u32>(0u, 0u, 0u, 0u);
         t.wt = vec4<f32>(1.0, 0.0, 0.0, 0.0);
