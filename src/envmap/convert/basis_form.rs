@@ -164,39 +164,24 @@ pub fn write(
     zip_level: u8,
 ) -> Result<(BasisStats, u64)> {
     let info = files::read_spectral_info(spectral)?;
-    let (w, h) = (info.width, info.height);
-    let n = a.wavelengths.len();
-    let kb = a.basis.len();
-    let k = kb + a.sun.is_some() as usize;
-    let mut names: Vec<String> = (0..k).map(|j| format!("k{j:02}")).collect();
-    if info.has_rgb {
-        names.extend(["R", "G", "B"].map(String::from));
-    }
-    let per_out = names.len();
-    let attributes = header(&info.attributes, a);
-    // A coefficient is at most the spectrum's norm for an orthogonal projection; the colour
-    // constraint can take it a little beyond: a stop of margin.
-    let bound = 2.0 * a.peak;
-    let ev = (precision == Precision::Half && bound > HALF_MAX as f64)
-        .then(|| (bound / HALF_MAX as f64).log2().ceil());
-    let smallest = 2f64.powi(-25) * ev.unwrap_or(0.0).exp2();
+    let form = Form::new(&info, a, precision);
     let mut writer = SpectralWriter::create(
         output,
         SpectralLayout {
-            width: w,
-            height: h,
-            channels: ChannelSet::Custom(names),
+            width: info.width,
+            height: info.height,
+            channels: ChannelSet::Custom(form.names.clone()),
             precision,
             compression,
             envmap: info.envmap,
-            ev,
-            attributes,
+            ev: form.ev,
+            attributes: header(&info.attributes, a),
             zip_level,
             unscaled: Vec::new(),
         },
     )?;
     let mut stats = BasisStats {
-        k,
+        k: form.k,
         sun: a.sun.is_some(),
         discarded: a.basis.discarded,
         max_residual: 0.0,
@@ -204,56 +189,22 @@ pub fn write(
         pixels_over_1_percent: 0,
         keeps_colour: a.basis.keeps_colour,
         ev: if precision == Precision::Half {
-            ev
+            form.ev
         } else {
             None
         },
         below_half: 0,
     };
-    let mut s = vec![0.0; n];
-    let mut c = vec![0.0; kb];
     let mut failed = None;
+    let mut scratch = Scratch {
+        s: vec![0.0; a.wavelengths.len()],
+        c: vec![0.0; a.basis.len()],
+        out: Vec::new(),
+    };
     files::read_spectral_rows(spectral, |y, row| {
-        let per = row.len() / w;
-        let mut out = vec![0f32; w * per_out];
-        for x in 0..w {
-            let px = &row[x * per..(x + 1) * per];
-            for (a, v) in s.iter_mut().zip(&px[..n]) {
-                *a = if v.is_finite() { *v as f64 } else { 0.0 };
-            }
-            let o = &mut out[x * per_out..(x + 1) * per_out];
-            let r = match &a.sun {
-                Some(sun) if a.mask[y * w + x] => {
-                    let l = a.colour.luminance(&s);
-                    o[kb] = l as f32;
-                    relative_residual(&s, |i| l * sun[i])
-                }
-                _ => {
-                    a.basis.project(&s, &mut c);
-                    for (o, v) in o.iter_mut().zip(&c) {
-                        *o = *v as f32;
-                    }
-                    a.basis.relative_residual(&s, &c)
-                }
-            };
-            if r > stats.max_residual {
-                stats.max_residual = r;
-                stats.max_residual_at = [x, y];
-            }
-            stats.pixels_over_1_percent += (r > 0.01) as usize;
-            let lit = o[..k].iter().any(|v| *v != 0.0);
-            if precision == Precision::Half
-                && lit
-                && o[..k].iter().all(|v| (v.abs() as f64) < smallest)
-            {
-                stats.below_half += 1;
-            }
-            if info.has_rgb {
-                o[k..k + 3].copy_from_slice(&px[n..n + 3]);
-            }
-        }
+        form.project_row(a, y, row, &mut scratch, &mut stats);
         if failed.is_none() {
-            if let Err(e) = writer.write_rows(y, &out) {
+            if let Err(e) = writer.write_rows(y, &scratch.out) {
                 failed = Some(e);
             }
         }
@@ -263,4 +214,106 @@ pub fn write(
     }
     let bytes = writer.finish()?;
     Ok((stats, bytes))
+}
+
+/// The basis form's channels and scale for a spectral file.
+struct Form {
+    width: usize,
+    /// Bands of the spectral file.
+    bands: usize,
+    /// The map's own spectra, and with the sun's.
+    kb: usize,
+    k: usize,
+    /// `k00`.., then R, G, B when the spectral file has them.
+    names: Vec<String>,
+    has_rgb: bool,
+    half: bool,
+    ev: Option<f64>,
+    /// Half's smallest value at the EV scale: coefficients below it are written as 0.
+    smallest: f64,
+}
+
+/// Per-row buffers: a pixel's spectrum and coefficients, and the row written.
+struct Scratch {
+    s: Vec<f64>,
+    c: Vec<f64>,
+    out: Vec<f32>,
+}
+
+impl Form {
+    fn new(info: &files::SpectralInfo, a: &Analysis, precision: Precision) -> Form {
+        let kb = a.basis.len();
+        let k = kb + a.sun.is_some() as usize;
+        let mut names: Vec<String> = (0..k).map(|j| format!("k{j:02}")).collect();
+        if info.has_rgb {
+            names.extend(["R", "G", "B"].map(String::from));
+        }
+        // A coefficient is at most the spectrum's norm for an orthogonal projection; the colour
+        // constraint can take it a little beyond: a stop of margin.
+        let bound = 2.0 * a.peak;
+        let ev = (precision == Precision::Half && bound > HALF_MAX as f64)
+            .then(|| (bound / HALF_MAX as f64).log2().ceil());
+        Form {
+            width: info.width,
+            bands: a.wavelengths.len(),
+            kb,
+            k,
+            names,
+            has_rgb: info.has_rgb,
+            half: precision == Precision::Half,
+            ev,
+            smallest: 2f64.powi(-25) * ev.unwrap_or(0.0).exp2(),
+        }
+    }
+
+    /// Row `y` of the spectral file as the basis form's values (into `scratch.out`), each
+    /// pixel's residual and flushed coefficients counted in `stats`.
+    fn project_row(
+        &self,
+        a: &Analysis,
+        y: usize,
+        row: &[f32],
+        scratch: &mut Scratch,
+        stats: &mut BasisStats,
+    ) {
+        let (w, n, k, kb) = (self.width, self.bands, self.k, self.kb);
+        let per = row.len() / w;
+        let per_out = self.names.len();
+        scratch.out.clear();
+        scratch.out.resize(w * per_out, 0.0);
+        let Scratch { s, c, out } = scratch;
+        for x in 0..w {
+            let px = &row[x * per..(x + 1) * per];
+            for (a, v) in s.iter_mut().zip(&px[..n]) {
+                *a = if v.is_finite() { *v as f64 } else { 0.0 };
+            }
+            let o = &mut out[x * per_out..(x + 1) * per_out];
+            let r = match &a.sun {
+                Some(sun) if a.mask[y * w + x] => {
+                    let l = a.colour.luminance(s);
+                    o[kb] = l as f32;
+                    relative_residual(s, |i| l * sun[i])
+                }
+                _ => {
+                    a.basis.project(s, c);
+                    for (o, v) in o.iter_mut().zip(c.iter()) {
+                        *o = *v as f32;
+                    }
+                    a.basis.relative_residual(s, c)
+                }
+            };
+            if r > stats.max_residual {
+                stats.max_residual = r;
+                stats.max_residual_at = [x, y];
+            }
+            stats.pixels_over_1_percent += (r > 0.01) as usize;
+            let lit = o[..k].iter().any(|v| *v != 0.0);
+            if self.half && lit && o[..k].iter().all(|v| (v.abs() as f64) < self.smallest) {
+                stats.below_half += 1;
+            }
+            if self.has_rgb {
+                o[k..k + 3].copy_from_slice(&px[n..n + 3]);
+            }
+        }
+    }
 }

@@ -33,33 +33,7 @@ pub(crate) fn carrier_plan(
     let [m0, m1, m2] = mcc;
     let mcc = [m0?, m1?, m2?];
     let one = opts.lights == Lights::One;
-    // The base carriers: the scene's light spectra, or the main light alone.
-    let bases: Vec<(String, Tabulated)> = if one || scene.reflectors.carriers.is_empty() {
-        if !one {
-            notes.push(format!(
-                "no light was found in the map: every pixel is carried by {}",
-                analysis.light
-            ));
-        }
-        vec![(
-            analysis.light.clone(),
-            data::spectrum(&analysis.light)?.data,
-        )]
-    } else {
-        scene
-            .reflectors
-            .carriers
-            .iter()
-            .map(|k| {
-                let l = scene
-                    .lights
-                    .iter()
-                    .find(|l| l.spd == k.spd)
-                    .expect("its light");
-                Ok((k.spd.clone(), l.spd_choice.table()?))
-            })
-            .collect::<Result<_>>()?
-    };
+    let bases = base_carriers(p, one, notes)?;
     let mut carriers: Vec<Carrier> = bases
         .iter()
         .map(|(name, t)| Carrier::new(name, &c.light(name, t)?, &c, &mcc))
@@ -101,6 +75,41 @@ pub(crate) fn carrier_plan(
         assign,
     };
     Ok((pixels, base_names, mixes))
+}
+
+/// The base carriers: the scene's light spectra, or the main light alone (`--lights one`, or a
+/// map where no light was found).
+fn base_carriers(
+    p: &Planning,
+    one: bool,
+    notes: &mut Vec<String>,
+) -> Result<Vec<(String, Tabulated)>> {
+    let (analysis, scene) = (p.analysis, &p.analysis.scene);
+    if one || scene.reflectors.carriers.is_empty() {
+        if !one {
+            notes.push(format!(
+                "no light was found in the map: every pixel is carried by {}",
+                analysis.light
+            ));
+        }
+        return Ok(vec![(
+            analysis.light.clone(),
+            data::spectrum(&analysis.light)?.data,
+        )]);
+    }
+    scene
+        .reflectors
+        .carriers
+        .iter()
+        .map(|k| {
+            let l = scene
+                .lights
+                .iter()
+                .find(|l| l.spd == k.spd)
+                .expect("its light");
+            Ok((k.spd.clone(), l.spd_choice.table()?))
+        })
+        .collect()
 }
 
 /// Whether a light is daylight: its least-squares fit by S0, S1, S2 leaves at most

@@ -23,7 +23,7 @@
 //!
 //! Sun pixels get the sun's SPD at the luminance their own conversion would have had.
 
-use crate::colorimetry::{Cmfs, Xyz};
+use crate::colorimetry::{Cmfs, RgbSpace, Xyz};
 use crate::envmap::roundtrip::metric::RgbMetric;
 #[cfg(test)]
 use crate::envmap::roundtrip::metric::ROUND_TRIP_ZERO;
@@ -288,6 +288,156 @@ pub enum Took {
     Fixed,
 }
 
+/// A spectrum on the output grid, RGB of it and its sun: what the engine's stages share.
+struct Measure {
+    grid: WavelengthGrid,
+    fit_grid: WavelengthGrid,
+    rule: Rule,
+    space: RgbSpace,
+    cmfs: Cmfs,
+    y_norm: f64,
+}
+
+/// The sun's spectrum (f32, at Y = 1) and its RGB.
+type SunSpectrum = (Vec<f32>, Vector3<f64>);
+
+impl Measure {
+    fn new(fit: &Fit, grid: WavelengthGrid, rule: Rule, space: RgbSpace) -> Result<Measure> {
+        let cmfs = Cmfs::new(fit.observer, &grid)?;
+        let y_norm = cmfs.y.integrate(rule);
+        Ok(Measure {
+            grid,
+            fit_grid: fit.grid,
+            rule,
+            space,
+            cmfs,
+            y_norm,
+        })
+    }
+
+    /// Values on the fit's grid, resampled to the output grid.
+    fn on_grid(&self, values: &[f64], interp: Interpolation) -> Result<Spectrum> {
+        let w: Vec<f64> = self.fit_grid.wavelengths_nm().collect();
+        Ok(Tabulated::new(w, values.to_vec())?.resample(&self.grid, interp))
+    }
+
+    fn luminance(&self, s: &Spectrum) -> Result<f64> {
+        Ok(s.try_mul(&self.cmfs.y)?.integrate(self.rule) / self.y_norm)
+    }
+
+    fn rgb(&self, s: &Spectrum) -> Result<Vector3<f64>> {
+        let [x, y, z] = self.cmfs.integrate(s, self.rule)?;
+        let n = self.y_norm;
+        // XYZ with Y = luminance, on the 0..100 scale the colour spaces expect.
+        let xyz = Xyz::new(100.0 * x / n, 100.0 * y / n, 100.0 * z / n);
+        Ok(Vector3::from(self.space.rgb_from_xyz(xyz)))
+    }
+
+    /// The fit's main light on the output grid, at Y = 1.
+    fn light(&self, fit: &Fit) -> Result<Spectrum> {
+        let light = self.on_grid(&fit.light_spd, Interpolation::LIGHT)?;
+        let light_y = self.luminance(&light)?;
+        if !light_y.is_finite() || light_y <= 0.0 {
+            return Err(Error::invalid(format!(
+                "the main light {} has no visible energy on the output grid {}",
+                fit.light, self.grid
+            )));
+        }
+        Ok(light.scaled(1.0 / light_y))
+    }
+
+    /// The fit's three basis reflectances times the light: spectra, luminances and RGB.
+    fn light_basis(
+        &self,
+        fit: &Fit,
+        light: &Spectrum,
+    ) -> Result<([Vec<f32>; 3], [f64; 3], Matrix3<f64>)> {
+        let mut basis: [Vec<f32>; 3] = Default::default();
+        let mut basis_y = [0.0; 3];
+        let mut basis_rgb = Matrix3::zeros();
+        for j in 0..3 {
+            let b = self
+                .on_grid(&fit.basis_reflectance[j], Interpolation::SMOOTH)?
+                .try_mul(light)?;
+            basis_y[j] = self.luminance(&b)?;
+            basis_rgb.set_column(j, &self.rgb(&b)?);
+            basis[j] = b.values().iter().map(|&v| v as f32).collect();
+        }
+        Ok((basis, basis_y, basis_rgb))
+    }
+
+    /// A set of three spectra as a Basis3 (None when they cannot carry every colour).
+    fn basis3(&self, spectra: [Spectrum; 3]) -> Result<Option<Basis3>> {
+        let mut y = [0.0; 3];
+        let mut rgb = Matrix3::zeros();
+        for j in 0..3 {
+            y[j] = self.luminance(&spectra[j])?;
+            rgb.set_column(j, &self.rgb(&spectra[j])?);
+        }
+        Ok(Basis3::new(spectra, y, rgb))
+    }
+
+    /// The CIE daylight components S0, S1, S2, scaled to Y ~ 1 each (S1 and S2 have little
+    /// luminance: their own scale would do).
+    fn daylight_basis(&self) -> Result<Option<Basis3>> {
+        let [s0, s1, s2] = illuminant::daylight_components()?
+            .map(|t| t.resample(&self.grid, Interpolation::LIGHT));
+        let k = 1.0 / self.luminance(&s0)?;
+        self.basis3([s0.scaled(k), s1.scaled(k), s2.scaled(k)])
+    }
+
+    /// The light times 1, x and x^2 of the wavelength's offset from the smooth model's centre.
+    fn smooth_basis(&self, light: &Spectrum) -> Result<Option<Basis3>> {
+        let grid = self.grid;
+        let x = |i: usize| (grid.wavelength_nm(i) - SMOOTH_CENTRE_NM) / SMOOTH_HALF_WIDTH_NM;
+        let with = |p: i32| -> Result<Spectrum> {
+            let v = (0..grid.len())
+                .map(|i| light.values()[i] * x(i).powi(p))
+                .collect();
+            Spectrum::new(grid, v)
+        };
+        self.basis3([with(0)?, with(1)?, with(2)?])
+    }
+
+    /// A sun given its SPD: on the output grid at Y = 1.
+    fn sun_of_spd(&self, t: &Tabulated) -> Result<SunSpectrum> {
+        let s = t.resample(&self.grid, Interpolation::LIGHT);
+        let y = self.luminance(&s)?;
+        if !y.is_finite() || y <= 0.0 {
+            return Err(Error::invalid(format!(
+                "the sun's SPD has no visible energy on {}",
+                self.grid
+            )));
+        }
+        let s = s.scaled(1.0 / y);
+        let rgb = self.rgb(&s)?;
+        Ok((s.values().iter().map(|&v| v as f32).collect(), rgb))
+    }
+}
+
+/// A sun given its colour (`rgb` as the input has it, `r` under the premise): the member of
+/// the daylight family that has it, at Y = 1.
+fn sun_of_colour(
+    daylight: Option<&Basis3>,
+    rgb: [f64; 3],
+    r: Vector3<f64>,
+    grid: WavelengthGrid,
+) -> Result<SunSpectrum> {
+    let d = daylight
+        .ok_or_else(|| Error::invalid("the CIE daylight basis is singular on the output grid"))?;
+    let a = d.inv * r;
+    let y = d.luminance(&a);
+    if !y.is_finite() || y <= 0.0 {
+        return Err(Error::invalid(format!(
+            "the sun's mean colour {rgb:?} has no luminance: no daylight matches it"
+        )));
+    }
+    let a = a / y;
+    let mut s = vec![0f32; grid.len()];
+    d.write(&a, &mut s);
+    Ok((s, d.rgb * a))
+}
+
 impl Engine {
     /// The paper's model (ColorChecker basis, light premise). `fit` gives the mode, basis
     /// reflectances and main light (on its own grid); `grid` is the output grid; `sun_spd` the
@@ -302,7 +452,8 @@ impl Engine {
         Engine::with_model(fit, grid, rule, sun, Model::PAPER)
     }
 
-    /// An engine following `model`.
+    /// An engine following `model`: the fit's light at Y = 1 and its three basis spectra on
+    /// `grid`, the daylight and smooth bases the model asks for, and the sun's spectrum.
     pub fn with_model(
         fit: &Fit,
         grid: WavelengthGrid,
@@ -311,69 +462,18 @@ impl Engine {
         model: Model,
     ) -> Result<Engine> {
         let space = fit.rgb_space();
-        let fit_grid = fit.grid;
-        let on_grid = |values: &[f64], interp: Interpolation| -> Result<Spectrum> {
-            let w: Vec<f64> = fit_grid.wavelengths_nm().collect();
-            Ok(Tabulated::new(w, values.to_vec())?.resample(&grid, interp))
-        };
-        let light = on_grid(&fit.light_spd, Interpolation::LIGHT)?;
-        let cmfs = Cmfs::new(fit.observer, &grid)?;
-        let y_norm = cmfs.y.integrate(rule);
-        let luminance_of =
-            |s: &Spectrum| -> Result<f64> { Ok(s.try_mul(&cmfs.y)?.integrate(rule) / y_norm) };
-        let rgb_of = |s: &Spectrum| -> Result<Vector3<f64>> {
-            let [x, y, z] = cmfs.integrate(s, rule)?;
-            // XYZ with Y = luminance, on the 0..100 scale the colour spaces expect.
-            let xyz = Xyz::new(100.0 * x / y_norm, 100.0 * y / y_norm, 100.0 * z / y_norm);
-            Ok(Vector3::from(space.rgb_from_xyz(xyz)))
-        };
-        let light_y = luminance_of(&light)?;
-        if !light_y.is_finite() || light_y <= 0.0 {
-            return Err(Error::invalid(format!(
-                "the main light {} has no visible energy on the output grid {grid}",
-                fit.light
-            )));
-        }
-        let light = light.scaled(1.0 / light_y);
-        let light_rgb = rgb_of(&light)?;
-        let mut basis: [Vec<f32>; 3] = Default::default();
-        let mut basis_y = [0.0; 3];
-        let mut basis_rgb = Matrix3::zeros();
-        for j in 0..3 {
-            let b = on_grid(&fit.basis_reflectance[j], Interpolation::SMOOTH)?.try_mul(&light)?;
-            basis_y[j] = luminance_of(&b)?;
-            basis_rgb.set_column(j, &rgb_of(&b)?);
-            basis[j] = b.values().iter().map(|&v| v as f32).collect();
-        }
-        // A set of three spectra as a Basis3 (None when they cannot carry every colour).
-        let basis3 = |spectra: [Spectrum; 3]| -> Result<Option<Basis3>> {
-            let mut y = [0.0; 3];
-            let mut rgb = Matrix3::zeros();
-            for j in 0..3 {
-                y[j] = luminance_of(&spectra[j])?;
-                rgb.set_column(j, &rgb_of(&spectra[j])?);
-            }
-            Ok(Basis3::new(spectra, y, rgb))
-        };
+        let m = Measure::new(fit, grid, rule, space)?;
+        let light = m.light(fit)?;
+        let light_rgb = m.rgb(&light)?;
+        let (basis, basis_y, basis_rgb) = m.light_basis(fit, &light)?;
         let need_daylight = model.sky_daylight || matches!(sun_source, SunSource::DaylightFit(_));
         let daylight = if need_daylight {
-            let [s0, s1, s2] =
-                illuminant::daylight_components()?.map(|t| t.resample(&grid, Interpolation::LIGHT));
-            // Scaled to Y ~ 1 each (S1 and S2 have little luminance: their own scale would do).
-            let k = 1.0 / luminance_of(&s0)?;
-            basis3([s0.scaled(k), s1.scaled(k), s2.scaled(k)])?
+            m.daylight_basis()?
         } else {
             None
         };
         let smooth = if model.smooth {
-            let x = |i: usize| (grid.wavelength_nm(i) - SMOOTH_CENTRE_NM) / SMOOTH_HALF_WIDTH_NM;
-            let with = |p: i32| -> Result<Spectrum> {
-                let v = (0..grid.len())
-                    .map(|i| light.values()[i] * x(i).powi(p))
-                    .collect();
-                Spectrum::new(grid, v)
-            };
-            basis3([with(0)?, with(1)?, with(2)?])?
+            m.smooth_basis(&light)?
         } else {
             None
         };
@@ -391,34 +491,9 @@ impl Engine {
         };
         let sun = match sun_source {
             SunSource::None => None,
-            SunSource::Spd(t) => {
-                let s = t.resample(&grid, Interpolation::LIGHT);
-                let y = luminance_of(&s)?;
-                if !y.is_finite() || y <= 0.0 {
-                    return Err(Error::invalid(format!(
-                        "the sun's SPD has no visible energy on {grid}"
-                    )));
-                }
-                let s = s.scaled(1.0 / y);
-                let rgb = rgb_of(&s)?;
-                Some((s.values().iter().map(|&v| v as f32).collect(), rgb))
-            }
+            SunSource::Spd(t) => Some(m.sun_of_spd(t)?),
             SunSource::DaylightFit(rgb) => {
-                let d = daylight.as_ref().ok_or_else(|| {
-                    Error::invalid("the CIE daylight basis is singular on the output grid")
-                })?;
-                let r = premise(rgb);
-                let a = d.inv * r;
-                let y = d.luminance(&a);
-                if !y.is_finite() || y <= 0.0 {
-                    return Err(Error::invalid(format!(
-                        "the sun's mean colour {rgb:?} has no luminance: no daylight matches it"
-                    )));
-                }
-                let a = a / y;
-                let mut s = vec![0f32; grid.len()];
-                d.write(&a, &mut s);
-                Some((s, d.rgb * a))
+                Some(sun_of_colour(daylight.as_ref(), rgb, premise(rgb), grid)?)
             }
         };
         Ok(Engine {
