@@ -13,8 +13,8 @@
 //!   light's) SPD, all scaled to luminance Y = 1 on the render's wavelengths. For a spectral or
 //!   basis map the `S_j` are the map's own spectra ([`own_spectra`]: the K spectra a basis file
 //!   stores, or a spectral file's principal components), so the render does not depend on
-//!   `--light`. Lighting integrals are taken in coefficient space on
-//!   the CPU ([`env`]): a diffuse irradiance map `D(N) = 1/pi int L max(N.w, 0) dw` and, per
+//!   `--light`. Lighting integrals are taken in coefficient space on the CPU
+//!   ([`env`](mod@env)): a diffuse irradiance map `D(N) = 1/pi int L max(N.w, 0) dw` and, per
 //!   shininess `n`, a specular map `P_n(R) = int L (R.w)^n dw / int (R.w)^n dw`, both lat-long;
 //!   the renderers expand the sampled coefficients with the spectra per wavelength;
 //! - the sun is a directional light with irradiance `E_sun` (in units of `E`) and direction `l`;
@@ -58,9 +58,10 @@
 //!
 //! # Modules
 //! - [`presets`]: the paper's figures as scenes; [`fingerprint`]: a scene's identity for caches.
-//! - [`env`]: environment lighting (pre-filtering, loading files): RGB and version-1 basis
-//!   files there, files of their own spectra in [`own_spectra`]; [`latlong`]: the coefficient
-//!   maps; [`env_report`]: what a load found; [`radiance_limit`]: the brightest value allowed.
+//! - [`env`](mod@env): environment lighting (pre-filtering, loading files): RGB and version-1
+//!   basis files there, files of their own spectra in [`own_spectra`]; [`latlong`]: the
+//!   coefficient maps; [`env_report`]: what a load found; [`radiance_limit`]: the brightest
+//!   value allowed.
 //! - [`prepare`]: a scene flattened for both renderers, in [`gpu_layout`]'s records, with
 //!   [`candidates`]: the objects each row and 8-pixel band can hit.
 //! - [`cpu`] and [`gpu`] (with `gpu.wgsl`): the renderers; [`image`]: images and comparisons.
