@@ -10,13 +10,14 @@ pub use super::latlong::{
 };
 pub use super::radiance_limit::MAX_RADIANCE;
 
+use super::file_layout::layout_of;
 use super::own_spectra::{self, Spectra};
 use super::prefiltered::Lobe;
 use super::radiance_limit::too_bright;
 use super::{Environment, LightSpectra, Lighting, Sun};
 use crate::colorimetry::{Observer, RgbSpace};
-use crate::envmap::files::{self, AttrValue, EnvmapAttr};
-use crate::envmap::layout::{detect, EnvMap, Layout};
+use crate::envmap::files::{self, AttrValue};
+use crate::envmap::layout::{EnvMap, Layout};
 use crate::envmap::scene::sun::{find_sun, SunSettings};
 use crate::envmap::RgbImage;
 use crate::error::{Error, Result};
@@ -306,13 +307,8 @@ fn read_map(path: &Path) -> Result<(EnvMap, [usize; 2], RgbSpace)> {
             .map_err(|e| Error::invalid(format!("{}: {e}", path.display())))?,
         None => RgbSpace::SRGB,
     };
-    let attr = img.envmap.map(|a| match a {
-        EnvmapAttr::LatLong => Layout::LatLong,
-        EnvmapAttr::Cube => Layout::Cube,
-    });
     let size = [img.image.width, img.image.height];
-    let layout = detect(img.image.width, img.image.height, attr)
-        .map_err(|e| Error::invalid(format!("{}: {e}", path.display())))?;
+    let layout = layout_of(path, img.image.width, img.image.height, img.envmap)?;
     let mut image = img.image;
     sanitize(path, &mut image)?;
     let map = EnvMap::new(layout, image)
@@ -562,11 +558,7 @@ impl V1Header {
 /// The layout of a `w x h` version-1 file: its `envmap` attribute's, else the one its size
 /// says.
 fn v1_layout(path: &Path, layer: &FlatLayer, w: usize, h: usize) -> Result<Layout> {
-    let envmap = files::envmap_attr(&layer.attributes).map(|a| match a {
-        EnvmapAttr::LatLong => Layout::LatLong,
-        EnvmapAttr::Cube => Layout::Cube,
-    });
-    detect(w, h, envmap).map_err(|e| Error::invalid(format!("{}: {e}", path.display())))
+    layout_of(path, w, h, files::envmap_attr(&layer.attributes))
 }
 
 /// The lighting's and the background's maps of the coefficients `c_img` and the sun `s` (a

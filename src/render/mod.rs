@@ -61,7 +61,7 @@
 //! - [`env`](mod@env): environment lighting (pre-filtering, loading files): RGB and version-1
 //!   basis files there, files of their own spectra in [`own_spectra`]; [`latlong`]: the
 //!   coefficient maps; [`env_report`]: what a load found; [`radiance_limit`]: the brightest
-//!   value allowed.
+//!   value allowed; `file_layout`: a file's layout.
 //! - [`prepare`]: a scene flattened for both renderers, in [`gpu_layout`]'s records, with
 //!   [`candidates`]: the objects each row and 8-pixel band can hit.
 //! - [`cpu`] and [`gpu`] (with `gpu.wgsl`): the renderers; [`image`]: images and comparisons.
@@ -72,6 +72,7 @@ pub mod candidates;
 pub mod cpu;
 pub mod env;
 pub mod env_report;
+mod file_layout;
 pub mod fingerprint;
 pub mod gpu;
 pub mod gpu_layout;

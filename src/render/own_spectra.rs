@@ -11,6 +11,7 @@
 //! the reference the projection is tested against.
 
 use super::env_report::{EnvReport, SUN_SPD};
+use super::file_layout::layout_of;
 use super::latlong::{self, CoeffMap, Maps, BACKGROUND_ROWS, SOURCE_ROWS};
 use super::radiance_limit::{too_bright, MAX_RADIANCE};
 use super::{Environment, LightSpectra, Lighting, Sun};
@@ -18,8 +19,8 @@ use crate::colorimetry::RgbSpace;
 use crate::envmap::convert::own_basis::{
     BandColour as Colour, Moments, OwnBasis, Projection, DEFAULT_DISCARD, MAX_K,
 };
-use crate::envmap::files::{self, AttrValue, EnvmapAttr};
-use crate::envmap::layout::{detect, EnvMap, Layout};
+use crate::envmap::files::{self, AttrValue};
+use crate::envmap::layout::{EnvMap, Layout};
 use crate::envmap::scene::sun::{find_sun, SunSettings};
 use crate::envmap::RgbImage;
 use crate::error::{Error, Result};
@@ -159,14 +160,6 @@ impl TexelPair {
             seen: one(self.seen),
         }
     }
-}
-
-fn layout_of(path: &Path, w: usize, h: usize, attr: Option<EnvmapAttr>) -> Result<Layout> {
-    let attr = attr.map(|a| match a {
-        EnvmapAttr::LatLong => Layout::LatLong,
-        EnvmapAttr::Cube => Layout::Cube,
-    });
-    detect(w, h, attr).map_err(|e| Error::invalid(format!("{}: {e}", path.display())))
 }
 
 /// An RGB-less map of the layout, for its directions and solid angles.
