@@ -3,9 +3,11 @@
 use super::{outln, SpaceArg};
 use anyhow::Context;
 use clap::{Args, ValueEnum};
+use specmap::envmap::convert::basis_form::BasisStats;
 use specmap::envmap::convert::pixel_spectra::WhitePremise;
 use specmap::envmap::convert::{
-    self, ConvertOptions, LightSpec, Lights, Method, OutputFormat, SkySpd, SunSpd, WhiteSpec,
+    self, ConvertOptions, ConvertReport, LightSpec, Lights, Method, OutputFormat, SkySpd, SunSpd,
+    WhiteSpec,
 };
 use specmap::envmap::files::{Compression, Precision};
 use specmap::envmap::layout::{Layout, Orientation, Up};
@@ -258,50 +260,19 @@ impl ConvertOptionArgs {
     /// The flags checked and turned into the library's options (a `--fit` file is loaded).
     pub fn to_options(&self) -> anyhow::Result<ConvertOptions> {
         let a = self;
-        if !a.rotation.is_finite() {
-            anyhow::bail!(
-                "--rotation {}: the angle must be a finite number of degrees",
-                a.rotation
-            );
-        }
-        if !(a.reflector_prior.is_finite() && (0.0..=100.0).contains(&a.reflector_prior)) {
-            anyhow::bail!(
-                "--reflector-prior {}: a weight from 0 to 100",
-                a.reflector_prior
-            );
-        }
-        if let Some(n) = a.size {
-            if n > MAX_SIZE {
-                anyhow::bail!(
-                "--size {n}: at most {MAX_SIZE} (a {0}x{MAX_SIZE} lat-long or {MAX_SIZE}-pixel cube \
-                 faces already hold billions of values)",
-                2 * MAX_SIZE
-            );
-            }
-        }
+        a.check_numbers()?;
         let fit = match &a.fit {
             Some(p) => Some(Fit::load(p)?),
             None => None,
         };
-        let in_layout = match a.in_layout {
-            InLayout::Auto | InLayout::Faces => None,
-            InLayout::Latlong => Some(Layout::LatLong),
-            InLayout::Cube => Some(Layout::Cube),
-            InLayout::Hcross => Some(Layout::HCross),
-            InLayout::Vcross => Some(Layout::VCross),
-            InLayout::Hstrip => Some(Layout::HStrip),
-            InLayout::Vstrip => Some(Layout::VStrip),
-        };
-        let opts = ConvertOptions {
+        let (mode, method) = a.mode.mode_and_method();
+        Ok(ConvertOptions {
             light: if a.light.eq_ignore_ascii_case("auto") {
                 LightSpec::Auto
             } else {
                 LightSpec::Named(a.light.clone())
             },
-            lights: match a.lights {
-                LightsArg::All => Lights::All,
-                LightsArg::One => Lights::One,
-            },
+            lights: a.lights.into(),
             reflectors: match a.reflectors {
                 ReflectorsArg::Local => ReflectorModel::Local {
                     prior: a.reflector_prior,
@@ -313,78 +284,179 @@ impl ConvertOptionArgs {
                 .map_or(specmap::colorimetry::RgbSpace::SRGB, Into::into),
             space_overrides_file: a.space.is_some(),
             fit,
-            mode: match a.mode {
-                ConvertModeArg::Paper => specmap::fit::Mode::Paper,
-                ConvertModeArg::Nonneg => specmap::fit::Mode::Nonneg,
-                ConvertModeArg::Faithful | ConvertModeArg::Exact => specmap::fit::Mode::Exact,
-            },
-            method: match a.mode {
-                ConvertModeArg::Faithful => Method::Faithful,
-                _ => Method::Basis,
-            },
-            white: a.white.map(|w| match w {
-                WhiteArg::Light => WhiteSpec::Light,
-                WhiteArg::Space => WhiteSpec::Space,
-                WhiteArg::Auto => WhiteSpec::Auto,
-            }),
-            sky: a.sky.map(|s| match s {
-                SkyArg::Daylight => SkySpd::Daylight,
-                SkyArg::Light => SkySpd::Light,
-            }),
+            mode,
+            method,
+            white: a.white.map(Into::into),
+            sky: a.sky.map(Into::into),
             sun: match a.sun {
                 SunArg::Auto => Some(SunSettings::default()),
                 SunArg::Off => None,
             },
-            sun_spd: a
-                .sun_spd
-                .as_ref()
-                .map(|s| match s.to_ascii_lowercase().as_str() {
-                    "d65" => SunSpd::D65,
-                    "match" => SunSpd::Match,
-                    "daylight" => SunSpd::Daylight,
-                    _ => SunSpd::Light(s.clone()),
-                }),
-            in_layout,
+            sun_spd: a.sun_spd.as_deref().map(sun_spd),
+            in_layout: a.in_layout.layout(),
             faces: matches!(a.in_layout, InLayout::Faces),
             layer: a.layer.clone(),
-            out_layout: match a.out_layout {
-                OutLayout::Same => None,
-                OutLayout::Latlong => Some(Layout::LatLong),
-                OutLayout::Cube => Some(Layout::Cube),
-            },
+            out_layout: a.out_layout.layout(),
             size: a.size,
             orientation: Orientation {
-                up: match a.up {
-                    UpArg::Y => Up::Y,
-                    UpArg::Z => Up::Z,
-                },
+                up: a.up.into(),
                 rotation_deg: a.rotation,
             },
             grid: a.range,
-            format: match a.format {
-                FormatArg::Spectral => OutputFormat::Spectral,
-                FormatArg::Basis => OutputFormat::Basis,
-            },
-            precision: match a.precision {
-                PrecisionArg::Half => Precision::Half,
-                PrecisionArg::Float => Precision::Float,
-            },
-            compression: match a.compression {
-                CompressionArg::None => Compression::None,
-                CompressionArg::Rle => Compression::Rle,
-                CompressionArg::Zip => Compression::Zip,
-                CompressionArg::Zips => Compression::Zips,
-                CompressionArg::Piz => Compression::Piz,
-                CompressionArg::Pxr24 => Compression::Pxr24,
-                CompressionArg::B44 => Compression::B44,
-                CompressionArg::B44a => Compression::B44a,
-            },
+            format: a.format.into(),
+            precision: a.precision.into(),
+            compression: a.compression.into(),
             zip_level: a.zip_level,
             strict: a.strict,
             tolerance: a.tolerance,
             ..ConvertOptions::default()
-        };
-        Ok(opts)
+        })
+    }
+
+    /// The numbers clap cannot check: a finite rotation, a prior from 0 to 100, a size in reach.
+    fn check_numbers(&self) -> anyhow::Result<()> {
+        if !self.rotation.is_finite() {
+            anyhow::bail!(
+                "--rotation {}: the angle must be a finite number of degrees",
+                self.rotation
+            );
+        }
+        if !(self.reflector_prior.is_finite() && (0.0..=100.0).contains(&self.reflector_prior)) {
+            anyhow::bail!(
+                "--reflector-prior {}: a weight from 0 to 100",
+                self.reflector_prior
+            );
+        }
+        if let Some(n) = self.size {
+            if n > MAX_SIZE {
+                anyhow::bail!(
+                    "--size {n}: at most {MAX_SIZE} (a {0}x{MAX_SIZE} lat-long or \
+                     {MAX_SIZE}-pixel cube faces already hold billions of values)",
+                    2 * MAX_SIZE
+                );
+            }
+        }
+        Ok(())
+    }
+}
+
+/// `--sun-spd`: `d65`, `match`, `daylight`, or any light by name.
+fn sun_spd(s: &str) -> SunSpd {
+    match s.to_ascii_lowercase().as_str() {
+        "d65" => SunSpd::D65,
+        "match" => SunSpd::Match,
+        "daylight" => SunSpd::Daylight,
+        _ => SunSpd::Light(s.to_string()),
+    }
+}
+
+impl ConvertModeArg {
+    /// The fit's mode and the method: `faithful` is the faithful method (its fallback fit
+    /// exact), the others the paper's basis method in their mode.
+    fn mode_and_method(self) -> (specmap::fit::Mode, Method) {
+        use specmap::fit::Mode;
+        match self {
+            ConvertModeArg::Faithful => (Mode::Exact, Method::Faithful),
+            ConvertModeArg::Paper => (Mode::Paper, Method::Basis),
+            ConvertModeArg::Exact => (Mode::Exact, Method::Basis),
+            ConvertModeArg::Nonneg => (Mode::Nonneg, Method::Basis),
+        }
+    }
+}
+
+impl InLayout {
+    /// The layout asked for (None: found from the file, or six face files).
+    fn layout(self) -> Option<Layout> {
+        match self {
+            InLayout::Auto | InLayout::Faces => None,
+            InLayout::Latlong => Some(Layout::LatLong),
+            InLayout::Cube => Some(Layout::Cube),
+            InLayout::Hcross => Some(Layout::HCross),
+            InLayout::Vcross => Some(Layout::VCross),
+            InLayout::Hstrip => Some(Layout::HStrip),
+            InLayout::Vstrip => Some(Layout::VStrip),
+        }
+    }
+}
+
+impl OutLayout {
+    /// The output's layout (None: the input's).
+    fn layout(self) -> Option<Layout> {
+        match self {
+            OutLayout::Same => None,
+            OutLayout::Latlong => Some(Layout::LatLong),
+            OutLayout::Cube => Some(Layout::Cube),
+        }
+    }
+}
+
+impl From<LightsArg> for Lights {
+    fn from(a: LightsArg) -> Lights {
+        match a {
+            LightsArg::All => Lights::All,
+            LightsArg::One => Lights::One,
+        }
+    }
+}
+
+impl From<WhiteArg> for WhiteSpec {
+    fn from(a: WhiteArg) -> WhiteSpec {
+        match a {
+            WhiteArg::Light => WhiteSpec::Light,
+            WhiteArg::Space => WhiteSpec::Space,
+            WhiteArg::Auto => WhiteSpec::Auto,
+        }
+    }
+}
+
+impl From<SkyArg> for SkySpd {
+    fn from(a: SkyArg) -> SkySpd {
+        match a {
+            SkyArg::Daylight => SkySpd::Daylight,
+            SkyArg::Light => SkySpd::Light,
+        }
+    }
+}
+
+impl From<UpArg> for Up {
+    fn from(a: UpArg) -> Up {
+        match a {
+            UpArg::Y => Up::Y,
+            UpArg::Z => Up::Z,
+        }
+    }
+}
+
+impl From<FormatArg> for OutputFormat {
+    fn from(a: FormatArg) -> OutputFormat {
+        match a {
+            FormatArg::Spectral => OutputFormat::Spectral,
+            FormatArg::Basis => OutputFormat::Basis,
+        }
+    }
+}
+
+impl From<PrecisionArg> for Precision {
+    fn from(a: PrecisionArg) -> Precision {
+        match a {
+            PrecisionArg::Half => Precision::Half,
+            PrecisionArg::Float => Precision::Float,
+        }
+    }
+}
+
+impl From<CompressionArg> for Compression {
+    fn from(a: CompressionArg) -> Compression {
+        match a {
+            CompressionArg::None => Compression::None,
+            CompressionArg::Rle => Compression::Rle,
+            CompressionArg::Zip => Compression::Zip,
+            CompressionArg::Zips => Compression::Zips,
+            CompressionArg::Piz => Compression::Piz,
+            CompressionArg::Pxr24 => Compression::Pxr24,
+            CompressionArg::B44 => Compression::B44,
+            CompressionArg::B44a => Compression::B44a,
+        }
     }
 }
 
@@ -405,32 +477,11 @@ pub(super) fn input_guard(
     guard
 }
 
+/// `specmap convert`: check the flags and files, convert with a progress bar, report.
 pub fn run(a: ConvertArgs) -> anyhow::Result<()> {
     let opts = a.options.to_options()?;
-    input_guard(&a.input, &opts, &a.options)
-        .output("-o", &a.output)
-        .check()?;
-    let is_exr = a
-        .output
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
-    if !is_exr {
-        anyhow::bail!(
-            "-o {}: convert writes OpenEXR; name the output .exr",
-            a.output.display()
-        );
-    }
-    let bar = (!a.quiet && std::io::stderr().is_terminal()).then(|| {
-        let b = indicatif::ProgressBar::new(0);
-        b.set_style(
-            indicatif::ProgressStyle::with_template(
-                "{msg} [{bar:40}] {pos}/{len} rows, {elapsed} (eta {eta})",
-            )
-            .expect("a valid template")
-            .progress_chars("=> "),
-        );
-        b
-    });
+    check_files(&a, &opts)?;
+    let bar = (!a.quiet && std::io::stderr().is_terminal()).then(rows_bar);
     let progress = |done: usize, total: usize| {
         if let Some(b) = &bar {
             // Drawn from the first report on, when the number of rows is known.
@@ -448,33 +499,48 @@ pub fn run(a: ConvertArgs) -> anyhow::Result<()> {
     }
     if a.json {
         super::emit(&(serde_json::to_string_pretty(&report)? + "\n"));
-        return Ok(());
+    } else if !a.quiet {
+        super::emit(&report_text(&report));
     }
-    if a.quiet {
-        return Ok(());
-    }
-    let r = &report;
-    let mut out = String::new();
-    outln!(out, "{} -> {}", r.input, r.output);
-    outln!(
-        out,
-        "  input        {} {}x{} ({})",
-        r.input_layout.name(),
-        r.input_size[0],
-        r.input_size[1],
-        r.input_description
-    );
-    if r.sanitized.non_finite + r.sanitized.negative + r.sanitized.negative_kept > 0 {
-        outln!(
-            out,
-            "  sanitized    {} NaN/infinite and {} negative values set to 0; {} negative values \
-             of out-of-gamut colours kept",
-            r.sanitized.non_finite,
-            r.sanitized.negative,
-            r.sanitized.negative_kept
+    Ok(())
+}
+
+/// The inputs exist and are not the output, which is an OpenEXR file that can be written.
+fn check_files(a: &ConvertArgs, opts: &ConvertOptions) -> anyhow::Result<()> {
+    input_guard(&a.input, opts, &a.options)
+        .output("-o", &a.output)
+        .check()?;
+    let is_exr = a
+        .output
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    if !is_exr {
+        anyhow::bail!(
+            "-o {}: convert writes OpenEXR; name the output .exr",
+            a.output.display()
         );
     }
-    outln!(out, "  space        {}", space_text(&r.space));
+    Ok(())
+}
+
+/// A progress bar of rows, its length set by the first report.
+fn rows_bar() -> indicatif::ProgressBar {
+    let b = indicatif::ProgressBar::new(0);
+    b.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{msg} [{bar:40}] {pos}/{len} rows, {elapsed} (eta {eta})",
+        )
+        .expect("a valid template")
+        .progress_chars("=> "),
+    );
+    b
+}
+
+/// The report in words: the input, its space and lights, the premises, the spectra, the file,
+/// the round trip and the time.
+fn report_text(r: &ConvertReport) -> String {
+    let mut out = String::new();
+    write_input(&mut out, r);
     write_lights(&mut out, r);
     outln!(
         out,
@@ -507,24 +573,58 @@ pub fn run(a: ConvertArgs) -> anyhow::Result<()> {
     outln!(out, "  sun          {}", sun_text(r));
     outln!(out, "  output       {}", output_text(r));
     if let Some(b) = &r.basis {
+        outln!(out, "  basis form   {}", basis_text(b));
+    }
+    write_round_trip(&mut out, r);
+    out
+}
+
+/// The input line, what sanitising changed, and the RGB space.
+fn write_input(out: &mut String, r: &ConvertReport) {
+    outln!(out, "{} -> {}", r.input, r.output);
+    outln!(
+        out,
+        "  input        {} {}x{} ({})",
+        r.input_layout.name(),
+        r.input_size[0],
+        r.input_size[1],
+        r.input_description
+    );
+    if r.sanitized.non_finite + r.sanitized.negative + r.sanitized.negative_kept > 0 {
         outln!(
             out,
-            "  basis form   {} spectra of the map's own{}: {:.1e} of the spectral energy outside \
-             them, {} pixels held to worse than 1% (worst {:.1}% at ({}, {})){}",
-            b.k,
-            if b.sun { ", the sun's among them" } else { "" },
-            b.discarded,
-            b.pixels_over_1_percent,
-            100.0 * b.max_residual,
-            b.max_residual_at[0],
-            b.max_residual_at[1],
-            if b.keeps_colour {
-                "; every pixel keeps its colour"
-            } else {
-                ""
-            }
+            "  sanitized    {} NaN/infinite and {} negative values set to 0; {} negative values \
+             of out-of-gamut colours kept",
+            r.sanitized.non_finite,
+            r.sanitized.negative,
+            r.sanitized.negative_kept
         );
     }
+    outln!(out, "  space        {}", space_text(&r.space));
+}
+
+/// How the basis form holds the spectral form.
+fn basis_text(b: &BasisStats) -> String {
+    format!(
+        "{} spectra of the map's own{}: {:.1e} of the spectral energy outside them, {} pixels \
+         held to worse than 1% (worst {:.1}% at ({}, {})){}",
+        b.k,
+        if b.sun { ", the sun's among them" } else { "" },
+        b.discarded,
+        b.pixels_over_1_percent,
+        100.0 * b.max_residual,
+        b.max_residual_at[0],
+        b.max_residual_at[1],
+        if b.keeps_colour {
+            "; every pixel keeps its colour"
+        } else {
+            ""
+        }
+    )
+}
+
+/// The round trip over all pixels and without the sun, and the time.
+fn write_round_trip(out: &mut String, r: &ConvertReport) {
     outln!(
         out,
         "  round trip   over {}",
@@ -549,8 +649,6 @@ pub fn run(a: ConvertArgs) -> anyhow::Result<()> {
         r.seconds_encode,
         r.megapixels_per_second
     );
-    super::emit(&out);
-    Ok(())
 }
 
 /// The lights lines of the report: each light of the scene, or the main light.
