@@ -108,13 +108,13 @@ impl Index {
             )));
         }
         if k < 0.0 {
-            return Err(Error::invalid(format!(
+            return Err(Error::unsupported(format!(
                 "refractive index {n}{k}i has k = {k} < 0, a gain medium; only passive media \
                  (k >= 0, absorbing when k > 0) are supported"
             )));
         }
         if n < 0.0 {
-            return Err(Error::invalid(format!(
+            return Err(Error::unsupported(format!(
                 "refractive index {n}+{k}i has a negative real part; negative-index media are \
                  not supported"
             )));
@@ -1107,6 +1107,21 @@ impl Stack {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn an_index_out_of_reach_is_unsupported_and_a_malformed_one_invalid() {
+        // Callers can tell what specmap does not do from a value that is wrong.
+        assert!(matches!(
+            Index::new(1.5, -0.1),
+            Err(Error::Unsupported { file: None, .. })
+        ));
+        assert!(matches!(
+            Index::new(-1.5, 0.0),
+            Err(Error::Unsupported { .. })
+        ));
+        assert!(matches!(Index::new(f64::NAN, 0.0), Err(Error::Invalid(_))));
+        assert!(matches!(Index::new(0.0, 0.0), Err(Error::Invalid(_))));
+    }
 
     fn idx(n: f64, k: f64) -> Index {
         Index::new(n, k).unwrap()

@@ -24,7 +24,7 @@ fn specmap_attributes(path: &Path) -> serde_json::Map<String, Value> {
             A::I32(i) => Value::from(*i),
             A::F32(f) => Value::from(*f),
             A::F64(f) => Value::from(*f),
-            A::Custom { kind, bytes } if kind.to_string() == "floatvector" => Value::from(
+            A::Custom { kind, bytes } if kind == "floatvector" => Value::from(
                 bytes
                     .chunks_exact(4)
                     .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
@@ -109,11 +109,17 @@ fn the_basis_form_keeps_the_spectral_form_s_attributes_and_no_version_1_ones() {
     for (name, value) in spectral {
         assert_eq!(basis.get(name), Some(value), "{name}");
     }
-    // What is added is the basis form's own: its version, K, spectra and the sun's index.
+    // What is added is the basis form's own: its version, K, wavelengths, spectra and the sun's
+    // index.
     let k = basis["specmap.basisK"].as_i64().unwrap();
     for name in basis.keys().filter(|n| !spectral.contains_key(*n)) {
-        let own = ["specmap.basisVersion", "specmap.basisK", "specmap.basisSun"]
-            .contains(&name.as_str())
+        let own = [
+            "specmap.basisVersion",
+            "specmap.basisK",
+            "specmap.basisSun",
+            "specmap.wavelengths",
+        ]
+        .contains(&name.as_str())
             || (0..k).any(|j| *name == format!("specmap.basis{j:02}"));
         assert!(
             own,

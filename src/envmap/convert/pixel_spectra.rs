@@ -298,6 +298,9 @@ struct Measure {
     y_norm: f64,
 }
 
+/// The light's three basis spectra (f32), their luminances, and their RGB as columns.
+type LightBasis = ([Vec<f32>; 3], [f64; 3], Matrix3<f64>);
+
 /// The sun's spectrum (f32, at Y = 1) and its RGB.
 type SunSpectrum = (Vec<f32>, Vector3<f64>);
 
@@ -351,7 +354,7 @@ impl Measure {
         &self,
         fit: &Fit,
         light: &Spectrum,
-    ) -> Result<([Vec<f32>; 3], [f64; 3], Matrix3<f64>)> {
+    ) -> Result<LightBasis> {
         let mut basis: [Vec<f32>; 3] = Default::default();
         let mut basis_y = [0.0; 3];
         let mut basis_rgb = Matrix3::zeros();
