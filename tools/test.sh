@@ -94,6 +94,9 @@ fi
 step "cargo fmt --check"
 cargo fmt --all -- --check
 
+step "no function over 80 lines without a reason (tools/long_functions.py)"
+python3 tools/long_functions.py --check src
+
 step "cargo clippy --all-targets -D warnings"
 cargo clippy --all-targets --quiet -- -D warnings
 
@@ -101,6 +104,13 @@ step "cargo test (unit + integration)"
 cargo test --all-targets --quiet 2>&1 | tee target/cargo-test.log
 # Doc tests too (examples in the docs must compile and pass).
 cargo test --doc --quiet
+
+step "numbered examples (examples/0*.rs, built above: each runs once)"
+for example in examples/0*.rs; do
+  name=$(basename "$example" .rs)
+  echo "-- $name"
+  "target/debug/examples/$name" >/dev/null
+done
 
 step "interop tests (pytest)"
 # test_exrio.py runs the write_spectral example: built here (cargo test built it already, so
