@@ -12,7 +12,17 @@ pub(crate) fn parse_err(path: &Path, message: impl Into<String>) -> Error {
     }
 }
 
-/// An error of the `exr` crate: a truncated file, an I/O error or a corrupt file.
+/// A file that is well formed but holds what the readers do not read (deep or subsampled data,
+/// an OpenEXR feature the `exr` crate lacks).
+pub(crate) fn unsupported_err(path: &Path, message: impl Into<String>) -> Error {
+    Error::Unsupported {
+        file: Some(path.to_path_buf()),
+        message: message.into(),
+    }
+}
+
+/// An error of the `exr` crate: a truncated file, an I/O error, a feature it does not read, or a
+/// corrupt file.
 pub(crate) fn exr_err(path: &Path, e: exr::error::Error) -> Error {
     match e {
         exr::error::Error::Io(source) => {
@@ -25,6 +35,13 @@ pub(crate) fn exr_err(path: &Path, e: exr::error::Error) -> Error {
                 }
             }
         }
+        exr::error::Error::NotSupported(what) => unsupported_err(
+            path,
+            format!(
+                "corrupt or unsupported OpenEXR file: {}",
+                exr::error::Error::NotSupported(what)
+            ),
+        ),
         other => parse_err(
             path,
             format!("corrupt or unsupported OpenEXR file: {other}"),

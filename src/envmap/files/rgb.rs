@@ -7,7 +7,7 @@ use crate::envmap::files::decode::{
     channel_names, compression_name, line_to_f32, open_exr, part_blocks, sample_type_name, sniff,
     FileKind,
 };
-use crate::envmap::files::errors::{exr_err, io_err, parse_err};
+use crate::envmap::files::errors::{exr_err, io_err, parse_err, unsupported_err};
 use crate::envmap::files::layout::EnvmapAttr;
 use crate::envmap::RgbImage;
 use crate::error::Result;
@@ -185,12 +185,12 @@ fn read_exr_rgb(path: &Path, layer: Option<&str>) -> Result<InputImage> {
 /// Fails on what is not read: deep data, subsampled channels, an image too large.
 fn check_readable(path: &Path, header: &Header, src: &RgbSource) -> Result<()> {
     if header.deep {
-        return Err(parse_err(path, "deep OpenEXR data is not supported"));
+        return Err(unsupported_err(path, "deep OpenEXR data is not supported"));
     }
     for &c in &src.channels {
         let ch = &header.channels.list[c];
         if ch.sampling != Vec2(1, 1) {
-            return Err(parse_err(
+            return Err(unsupported_err(
                 path,
                 format!(
                     "channel {} is subsampled ({}x{}), which is not supported",
