@@ -317,7 +317,7 @@ fn single_pixel(p: &Prepared, x: usize, y: usize) -> [f64; 3] {
     q.params.view[0] = wx as f32;
     q.params.view[1] = wy as f32;
     // The frame changed: so did which objects its one row can hit.
-    q.rows = specmap::render::rows::index(&q.objects, &q.params);
+    q.rows = specmap::render::candidates::index(&q.objects, &q.params);
     px(&cpu::render(&q), 0, 0)
 }
 

@@ -1,4 +1,4 @@
-//! The preview lit by the spectra a map holds (src/render/own.rs): a spectral map projected onto
+//! The preview lit by the spectra a map holds (src/render/own_spectra.rs): a spectral map projected onto
 //! its own K spectra renders as the full N-band spectra do (CPU reference, no projection), on
 //! both backends, whatever `--light` says; the basis form of a conversion renders as its
 //! spectral form does.
@@ -10,7 +10,7 @@ mod common;
 use specmap::colorimetry::RgbSpace;
 use specmap::envmap::convert::{convert, ConvertOptions, OutputFormat};
 use specmap::envmap::files::Precision;
-use specmap::render::own::{load_spectral, Spectra};
+use specmap::render::own_spectra::{load_spectral, Spectra};
 use specmap::render::prepare::Prepared;
 use specmap::render::{compare, cpu, env, Backdrop, Image, Lighting, Preset, Spectral};
 use std::path::Path;

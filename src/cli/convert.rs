@@ -29,7 +29,7 @@ Examples:
   specmap convert sky_{face}.exr -o sky.exr --in-layout faces
   specmap convert blender.exr -o b.exr --up z --rotation 90
   specmap convert envmaps/sunrise.exr -o s.exr --format basis --tolerance 0.5 --quiet")]
-pub struct ConvertArgs {
+pub(crate) struct ConvertArgs {
     /// Input map: OpenEXR or Radiance .hdr; with --in-layout faces, a pattern with {face}
     /// (px, nx, py, ny, pz, nz).
     input: String,
@@ -48,7 +48,7 @@ pub struct ConvertArgs {
 
 /// The flags that say how a map is converted (shared by `convert`, `inspect` and `batch`).
 #[derive(Debug, Args)]
-pub struct ConvertOptionArgs {
+pub(crate) struct ConvertOptionArgs {
     /// `auto` (the default): every light the scene holds, found and classified (sun, sky,
     /// windows, lamps of their families); a table name or CSV: the spectrum of the lamps (the
     /// sun, sky and windows keep daylight), or with --lights one of every non-sun pixel.
@@ -248,17 +248,17 @@ enum CompressionArg {
 
 impl ConvertOptionArgs {
     /// The input is six face files named by a `{face}` pattern.
-    pub fn faces(&self) -> bool {
+    pub(crate) fn faces(&self) -> bool {
         matches!(self.in_layout, InLayout::Faces)
     }
 
     /// The `--fit` file, an input of the command.
-    pub fn fit_file(&self) -> Option<&std::path::Path> {
+    pub(crate) fn fit_file(&self) -> Option<&std::path::Path> {
         self.fit.as_deref()
     }
 
     /// The flags checked and turned into the library's options (a `--fit` file is loaded).
-    pub fn to_options(&self) -> anyhow::Result<ConvertOptions> {
+    pub(crate) fn to_options(&self) -> anyhow::Result<ConvertOptions> {
         let a = self;
         a.check_numbers()?;
         let fit = match &a.fit {
@@ -478,7 +478,7 @@ pub(super) fn input_guard(
 }
 
 /// `specmap convert`: check the flags and files, convert with a progress bar, report.
-pub fn run(a: ConvertArgs) -> anyhow::Result<()> {
+pub(crate) fn run(a: ConvertArgs) -> anyhow::Result<()> {
     let opts = a.options.to_options()?;
     check_files(&a, &opts)?;
     let bar = (!a.quiet && std::io::stderr().is_terminal()).then(rows_bar);

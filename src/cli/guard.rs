@@ -9,21 +9,21 @@ use std::path::{Path, PathBuf};
 
 /// What a command reads and writes, each with the flag that named it.
 #[derive(Debug, Default)]
-pub struct Guard {
+pub(crate) struct Guard {
     inputs: Vec<(String, PathBuf)>,
     outputs: Vec<(String, PathBuf)>,
     folders: Vec<(String, PathBuf)>,
 }
 
 impl Guard {
-    pub fn new() -> Guard {
+    pub(crate) fn new() -> Guard {
         Guard::default()
     }
 
     /// A file the command reads, with the flag that names it ("" for a positional argument).
     /// One that does not exist is skipped: reading it fails with its own message, and it cannot
     /// be overwritten.
-    pub fn input(&mut self, what: &str, path: impl AsRef<Path>) -> &mut Guard {
+    pub(crate) fn input(&mut self, what: &str, path: impl AsRef<Path>) -> &mut Guard {
         let path = path.as_ref();
         if path.is_file() {
             self.inputs.push((what.to_string(), path.to_path_buf()));
@@ -33,7 +33,7 @@ impl Guard {
 
     /// A spectrum or index argument: TABLE, TABLE:COLUMN, PATH, PATH:COLUMN, or
     /// INDEX:THICKNESS; whichever of the whole and the part before the last ':' is a file.
-    pub fn spec(&mut self, what: &str, spec: &str) -> &mut Guard {
+    pub(crate) fn spec(&mut self, what: &str, spec: &str) -> &mut Guard {
         self.input(what, spec);
         if let Some((head, _)) = spec.rsplit_once(':') {
             if !head.is_empty() {
@@ -44,7 +44,7 @@ impl Guard {
     }
 
     /// Several [`Guard::spec`] arguments, comma-separated (`--layers`, `--film`).
-    pub fn spec_list(&mut self, what: &str, list: &str) -> &mut Guard {
+    pub(crate) fn spec_list(&mut self, what: &str, list: &str) -> &mut Guard {
         for part in list.split(',').map(str::trim).filter(|p| !p.is_empty()) {
             self.spec(what, part);
         }
@@ -52,7 +52,7 @@ impl Guard {
     }
 
     /// A file the command writes.
-    pub fn output(&mut self, what: &str, path: impl AsRef<Path>) -> &mut Guard {
+    pub(crate) fn output(&mut self, what: &str, path: impl AsRef<Path>) -> &mut Guard {
         self.outputs
             .push((what.to_string(), path.as_ref().to_path_buf()));
         self
@@ -61,7 +61,7 @@ impl Guard {
     /// A folder the command writes its files into and creates itself when missing (`demo -o`,
     /// `render --sweep-out`, `batch --out-dir`), once the check and its own early checks pass:
     /// its files are not refused for a missing folder.
-    pub fn folder(&mut self, what: &str, dir: impl AsRef<Path>) -> &mut Guard {
+    pub(crate) fn folder(&mut self, what: &str, dir: impl AsRef<Path>) -> &mut Guard {
         self.folders
             .push((what.to_string(), dir.as_ref().to_path_buf()));
         self
@@ -69,7 +69,7 @@ impl Guard {
 
     /// Fails, naming both files, when an output is an input or another output, or naming the
     /// output when it cannot be replaced by a regular file. Nothing is written.
-    pub fn check(&self) -> anyhow::Result<()> {
+    pub(crate) fn check(&self) -> anyhow::Result<()> {
         for (what, dir) in &self.folders {
             if dir.exists() && !dir.is_dir() {
                 anyhow::bail!("{what} {}: exists and is not a folder", dir.display());

@@ -17,7 +17,7 @@ Examples:
   specmap inspect envmaps/forest.exr --json
   specmap inspect envmaps/sunrise.exr --overlay sunrise-lights.png
   specmap inspect street.exr --light hps --overlay street.png")]
-pub struct InspectArgs {
+pub(crate) struct InspectArgs {
     /// Input map: OpenEXR or Radiance .hdr (any layout `convert` reads).
     input: String,
     /// Draw each light's region on the tonemapped map, numbered, with a legend (PNG).
@@ -30,7 +30,7 @@ pub struct InspectArgs {
     json: bool,
 }
 
-pub fn run(a: InspectArgs) -> anyhow::Result<()> {
+pub(crate) fn run(a: InspectArgs) -> anyhow::Result<()> {
     let opts = a.options.to_options()?;
     let mut guard = input_guard(&a.input, &opts, &a.options);
     if let Some(o) = &a.overlay {

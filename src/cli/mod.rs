@@ -12,7 +12,7 @@ mod inspect;
 mod render;
 mod rendition;
 mod roundtrip;
-pub mod runtime_dir;
+pub(crate) mod runtime_dir;
 mod sequence;
 mod thinfilm;
 mod tolerance;
@@ -54,7 +54,7 @@ A spectrum is a built-in table name (see `specmap data list`), TABLE:COLUMN
 /// Spectral data toolkit and RGB -> spectral environment-map converter.
 #[derive(Debug, Parser)]
 #[command(name = "specmap", version, about, after_help = AFTER_HELP)]
-pub struct Cli {
+pub(crate) struct Cli {
     #[command(subcommand)]
     command: Command,
 }
@@ -96,7 +96,7 @@ enum Command {
 
 impl Cli {
     /// Whether the command may open a GPU (and so load the Vulkan loader and its layers).
-    pub fn may_use_gpu(&self) -> bool {
+    pub(crate) fn may_use_gpu(&self) -> bool {
         matches!(
             self.command,
             Command::Demo(_) | Command::Bench(_) | Command::Render(_) | Command::View(_)
@@ -104,7 +104,7 @@ impl Cli {
     }
 }
 
-pub fn run(cli: Cli) -> anyhow::Result<()> {
+pub(crate) fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Demo(a) => demo::run(a),
         Command::Bench(a) => bench::run(a),
@@ -124,7 +124,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
 
 /// The options every colour computation shares: observer, wavelength grid, integration rule.
 #[derive(Debug, Clone, clap::Args)]
-pub struct SpectralArgs {
+pub(crate) struct SpectralArgs {
     /// Standard observer.
     #[arg(long, value_enum, default_value_t = ObserverArg::Cie1931)]
     pub observer: ObserverArg,
@@ -137,7 +137,7 @@ pub struct SpectralArgs {
 }
 
 /// Appends the XYZ and xy lines of the human-readable colour summaries.
-pub fn write_xyz(out: &mut String, xyz: specmap::colorimetry::Xyz) {
+pub(crate) fn write_xyz(out: &mut String, xyz: specmap::colorimetry::Xyz) {
     let xy = xyz.xy();
     outln!(
         out,
@@ -150,7 +150,7 @@ pub fn write_xyz(out: &mut String, xyz: specmap::colorimetry::Xyz) {
 }
 
 /// Appends what `--tolerance` chose.
-pub fn write_grid_choice(out: &mut String, c: &specmap::tradeoff::GridChoice) {
+pub(crate) fn write_grid_choice(out: &mut String, c: &specmap::tradeoff::GridChoice) {
     let tried: Vec<String> = c
         .tried
         .iter()
@@ -183,7 +183,7 @@ pub fn write_grid_choice(out: &mut String, c: &specmap::tradeoff::GridChoice) {
 }
 
 /// Appends the 8-bit sRGB line (with its hex code).
-pub fn write_srgb8(out: &mut String, code: [u8; 3]) {
+pub(crate) fn write_srgb8(out: &mut String, code: [u8; 3]) {
     let [r, g, b] = code;
     outln!(
         out,
@@ -279,7 +279,7 @@ impl From<SpaceArg> for RgbSpace {
 
 /// Prints to stdout; a closed pipe (`specmap data list | head`) ends the program quietly
 /// instead of panicking.
-pub fn emit(text: &str) {
+pub(crate) fn emit(text: &str) {
     use std::io::Write;
     let mut out = std::io::stdout().lock();
     if let Err(e) = out.write_all(text.as_bytes()).and_then(|_| out.flush()) {
@@ -292,7 +292,7 @@ pub fn emit(text: &str) {
 }
 
 /// One round-trip statistic in words (both `convert` and `roundtrip` print it).
-pub fn round_trip_text(s: &specmap::envmap::roundtrip::stats::RoundTripStats) -> String {
+pub(crate) fn round_trip_text(s: &specmap::envmap::roundtrip::stats::RoundTripStats) -> String {
     let at = s
         .max_at
         .map(|[x, y]| format!(" at ({x}, {y}), luminance {:.3e}", s.max_luminance))
@@ -315,7 +315,7 @@ pub fn round_trip_text(s: &specmap::envmap::roundtrip::stats::RoundTripStats) ->
 }
 
 /// The floor of the round-trip statistics in words.
-pub fn floor_text(f: &specmap::envmap::roundtrip::stats::Floor) -> String {
+pub(crate) fn floor_text(f: &specmap::envmap::roundtrip::stats::Floor) -> String {
     format!(
         "pixels of luminance {:.3e} or more ({}, {:.3e})",
         f.luminance, f.rule, f.reference_luminance

@@ -21,7 +21,7 @@ use std::path::{Path, PathBuf};
 /// Points `XDG_RUNTIME_DIR` at a private folder when it is unset or not an absolute path (what
 /// libwayland calls invalid); returns that folder, or None when the session's own is kept or no
 /// private folder could be made safely (then nothing changes). Call it before spawning threads.
-pub fn provide() -> Option<PathBuf> {
+pub(crate) fn provide() -> Option<PathBuf> {
     let usable = std::env::var_os("XDG_RUNTIME_DIR").is_some_and(|d| Path::new(&d).is_absolute());
     if usable {
         return None;

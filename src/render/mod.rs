@@ -87,13 +87,6 @@ pub mod radiance_limit;
 pub mod stimuli;
 pub mod sweep;
 
-/// The old name of [`candidates`], kept for code that imports `render::rows`.
-#[doc(hidden)]
-pub use self::candidates as rows;
-/// The old name of [`own_spectra`], kept for code that imports `render::own`.
-#[doc(hidden)]
-pub use self::own_spectra as own;
-
 pub use self::image::{compare, Comparison, Image};
 pub use presets::Preset;
 

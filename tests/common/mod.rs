@@ -9,7 +9,7 @@ use std::path::Path;
 use std::process::{Command, Output};
 
 /// Runs the `specmap` binary built for the tests.
-pub fn specmap(args: &[&str]) -> Output {
+pub(crate) fn specmap(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_specmap"))
         .args(args)
         .output()
@@ -17,7 +17,7 @@ pub fn specmap(args: &[&str]) -> Output {
 }
 
 /// A bundled sample map in envmaps/, as a path string.
-pub fn sample(name: &str) -> String {
+pub(crate) fn sample(name: &str) -> String {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("envmaps")
         .join(name)
@@ -27,12 +27,12 @@ pub fn sample(name: &str) -> String {
 
 /// Writes a single-part scan-line EXR of f32 channels (sorted by name, as OpenEXR stores them)
 /// with the exr crate: an independent writer, which also lets a test put NaN or huge values in.
-pub fn write_channels(path: &Path, w: usize, h: usize, channels: Vec<(&str, Vec<f32>)>) {
+pub(crate) fn write_channels(path: &Path, w: usize, h: usize, channels: Vec<(&str, Vec<f32>)>) {
     write_channels_with(path, w, h, channels, LayerAttributes::default());
 }
 
 /// [`write_channels`] with the layer's attributes.
-pub fn write_channels_with(
+pub(crate) fn write_channels_with(
     path: &Path,
     w: usize,
     h: usize,
@@ -53,7 +53,7 @@ pub fn write_channels_with(
 }
 
 /// Runs `specmap ARGS --json`, which must succeed, and parses its output.
-pub fn specmap_json(args: &[&str]) -> serde_json::Value {
+pub(crate) fn specmap_json(args: &[&str]) -> serde_json::Value {
     let mut all = args.to_vec();
     all.push("--json");
     let out = specmap(&all);
@@ -68,7 +68,7 @@ pub fn specmap_json(args: &[&str]) -> serde_json::Value {
 /// The GPU renderer, once per test binary; None without an adapter, unless
 /// `SPECMAP_REQUIRE_GPU=1` (set by tools/test.sh, which installs Mesa's lavapipe), where a
 /// missing adapter fails.
-pub fn gpu() -> Option<&'static specmap::render::gpu::Gpu> {
+pub(crate) fn gpu() -> Option<&'static specmap::render::gpu::Gpu> {
     use specmap::render::gpu::Gpu;
     static GPU: std::sync::OnceLock<Option<Gpu>> = std::sync::OnceLock::new();
     GPU.get_or_init(|| match Gpu::new() {

@@ -34,7 +34,7 @@ use rayon::prelude::*;
 
 /// A texel the quadrature errs on.
 #[derive(Debug, Clone)]
-pub struct Miss {
+pub(crate) struct Miss {
     pub lighting: usize,
     pub coefficients: Vec<f64>,
     pub error: f64,
@@ -179,7 +179,7 @@ fn texel_error(c: &Candidate, t: &[Template], which: &[usize], white: Xyz) -> (f
 /// The texels of `scene`'s maps on which `q` errs most, worst first: up to `count`, no two
 /// alike, and the largest error over all of them. `seen` holds each lighting's seen map as the
 /// image can show it ([`Scene::visible_seens`]).
-pub fn worst_texels(
+pub(crate) fn worst_texels(
     scene: &Scene,
     seen: &[Option<crate::render::env::CoeffMap>],
     q: &Quadrature,

@@ -14,11 +14,11 @@ use crate::render::{compare, Image, Scene};
 use crate::spectrum::{Rule, WavelengthGrid};
 
 /// The most pixels checked: an image with more is checked on every `stride`-th row and column.
-pub const MAX_PIXELS: usize = 128 * 128;
+pub(crate) const MAX_PIXELS: usize = 128 * 128;
 
 /// The image's pixels checked, and their 1 nm render (made once, for every quadrature checked)
 /// as a one-row image.
-pub struct Reference {
+pub(crate) struct Reference {
     at: Vec<[usize; 2]>,
     stride: usize,
     one_nm: Image,
@@ -58,13 +58,13 @@ fn lattice(width: usize, height: usize, stride: usize) -> Vec<[usize; 2]> {
 }
 
 /// The pixels checked of a `width x height` image.
-pub fn lattice_len(width: usize, height: usize) -> usize {
+pub(crate) fn lattice_len(width: usize, height: usize) -> usize {
     blocks(width, height, stride(width, height))
 }
 
 impl Reference {
     /// `scene`'s 1 nm render in `space` on its lattice, for `observer`.
-    pub fn new(scene: &Scene, observer: Observer, space: RgbSpace) -> Result<Reference> {
+    pub(crate) fn new(scene: &Scene, observer: Observer, space: RgbSpace) -> Result<Reference> {
         let stride = stride(scene.width, scene.height);
         let at = lattice(scene.width, scene.height, stride);
         let grid = WavelengthGrid::new(380.0, 780.0, 1.0)?;
@@ -79,7 +79,7 @@ impl Reference {
     }
 
     /// `q`'s render of `scene` against the 1 nm one, on the lattice.
-    pub fn check(&self, scene: &Scene, q: &Quadrature) -> Result<ImageCheck> {
+    pub(crate) fn check(&self, scene: &Scene, q: &Quadrature) -> Result<ImageCheck> {
         let on_q = row(scene.render_cpu_pixels(q, self.space, &self.at)?);
         let c = compare(&on_q, &self.one_nm, &self.space)?;
         Ok(ImageCheck {

@@ -19,12 +19,12 @@ use crate::spectrum::{Interpolation, Rule, Tabulated, WavelengthGrid};
 use crate::tradeoff::{sample, Factor};
 
 /// Texels fitted at first.
-pub const FITTED: usize = 16;
+pub(crate) const FITTED: usize = 16;
 /// Texels after those, only checked (the held-out set).
-pub const CHECKED: usize = 16;
+pub(crate) const CHECKED: usize = 16;
 /// The most texels fitted: where the fit misses on the checked ones, half of them join the
 /// fit ([`crate::render::Scene::choose_quadrature`]), up to this many.
-pub const MAX_FITTED: usize = 32;
+pub(crate) const MAX_FITTED: usize = 32;
 
 /// The equal-energy light a map's own spectra radiate over.
 pub(super) fn equal_energy() -> Result<Tabulated> {
