@@ -350,11 +350,7 @@ impl Measure {
     }
 
     /// The fit's three basis reflectances times the light: spectra, luminances and RGB.
-    fn light_basis(
-        &self,
-        fit: &Fit,
-        light: &Spectrum,
-    ) -> Result<LightBasis> {
+    fn light_basis(&self, fit: &Fit, light: &Spectrum) -> Result<LightBasis> {
         let mut basis: [Vec<f32>; 3] = Default::default();
         let mut basis_y = [0.0; 3];
         let mut basis_rgb = Matrix3::zeros();
