@@ -16,8 +16,11 @@ pub mod scene;
 /// A linear RGB image in memory, row-major from the top-left pixel, f32 per channel.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RgbImage {
+    /// Width in pixels.
     pub width: usize,
+    /// Height in pixels.
     pub height: usize,
+    /// Linear RGB per pixel, row-major from the top-left.
     pub pixels: Vec<[f32; 3]>,
 }
 
@@ -30,9 +33,11 @@ impl RgbImage {
             pixels: vec![[0.0; 3]; width * height],
         }
     }
+    /// The RGB of pixel (x, y).
     pub fn get(&self, x: usize, y: usize) -> [f32; 3] {
         self.pixels[y * self.width + x]
     }
+    /// Sets pixel (x, y) to `rgb`.
     pub fn set(&mut self, x: usize, y: usize, rgb: [f32; 3]) {
         self.pixels[y * self.width + x] = rgb;
     }

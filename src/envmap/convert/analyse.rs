@@ -15,12 +15,14 @@ use crate::spectrum::{Rule, WavelengthGrid};
 /// What the scene is, and the premises taken of it.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct Analysis {
+    /// The lights, levels and reflectors found in the map.
     pub scene: Scene,
     /// The one main light: the spectrum of every non-sun pixel with `--lights one` and in the
     /// paper's modes; with the scene's lights, the dominant one (the fit's light).
     pub light: String,
     /// How `--light auto` chose the main light (one light, or the paper's modes).
     pub light_choice: Option<LightChoice>,
+    /// What RGB (1,1,1) is taken to be, and why.
     pub white: WhiteChoice,
 }
 

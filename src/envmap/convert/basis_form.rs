@@ -36,6 +36,7 @@ pub struct BasisStats {
     pub discarded: f64,
     /// The largest relative spectral residual of a pixel, and where.
     pub max_residual: f64,
+    /// The pixel (x, y) of the largest residual.
     pub max_residual_at: [usize; 2],
     /// Pixels whose spectrum the spectra hold to worse than 1%.
     pub pixels_over_1_percent: usize,
@@ -49,6 +50,7 @@ pub struct BasisStats {
 
 /// What the first read found.
 pub struct Analysis {
+    /// The map's own spectra (principal components) and their projection.
     pub basis: OwnBasis,
     /// The sun's SPD (the mean of its pixels' spectra) at luminance 1, and the mask.
     pub sun: Option<Vec<f64>>,

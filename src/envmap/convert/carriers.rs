@@ -44,6 +44,7 @@ pub struct Colorimeter {
 }
 
 impl Colorimeter {
+    /// Integrates on `grid` with `observer`'s colour-matching functions and `rule`, in `space`.
     pub fn new(
         grid: WavelengthGrid,
         observer: Observer,
@@ -61,14 +62,17 @@ impl Colorimeter {
         })
     }
 
+    /// The grid spectra are sampled on.
     pub fn grid(&self) -> &WavelengthGrid {
         &self.grid
     }
 
+    /// Luminance of `s` (specmap's scale: `Y = sum(L ybar) / sum(ybar)`).
     pub fn luminance(&self, s: &Spectrum) -> Result<f64> {
         Ok(s.try_mul(&self.cmfs.y)?.integrate(self.rule) / self.y_norm)
     }
 
+    /// Linear RGB of `s` in the space, Y = 1 for a spectrum of luminance 1.
     pub fn rgb(&self, s: &Spectrum) -> Result<Vector3<f64>> {
         let [x, y, z] = self.cmfs.integrate(s, self.rule)?;
         let n = self.y_norm;
@@ -104,6 +108,7 @@ impl Colorimeter {
 /// A carrier spectrum with the bases of its modulations.
 #[derive(Debug, Clone)]
 pub struct Carrier {
+    /// The light's name (a table, a lamp family member, or a mix of lights).
     pub name: String,
     spd: Vec<f32>,
     /// RGB of the SPD (Y = 1).
@@ -234,6 +239,7 @@ fn bernstein_poly(n: usize, k: usize, t: f64) -> f64 {
 pub struct Assign {
     /// Index into the engine's carriers.
     pub carrier: u16,
+    /// The pixel is the sun's: it takes the sun's SPD.
     pub sun: bool,
     /// May take the daylight basis if daylight-coloured.
     pub daylight: bool,
@@ -246,6 +252,7 @@ pub struct Assign {
 pub struct Written {
     /// RGB of the written spectrum under the white premise (compare with the input).
     pub rgb_back: [f64; 3],
+    /// Which spectrum the pixel got.
     pub took: Took,
     /// The spectrum reproduces the pixel's RGB (to rounding).
     pub exact: bool,
@@ -254,6 +261,7 @@ pub struct Written {
 /// Everything needed to turn pixels into spectra with many lights.
 #[derive(Debug, Clone)]
 pub struct CarrierEngine {
+    /// The light spectra pixels are carried by, the reflectors' mixes after the lights.
     pub carriers: Vec<Carrier>,
     daylight: Option<Basis3>,
     /// The sun's SPD at Y = 1 and its RGB.
@@ -268,13 +276,17 @@ pub struct CarrierEngine {
 /// The sun's SPD.
 #[derive(Debug, Clone)]
 pub enum SunSpec {
+    /// No sun in the map.
     None,
     /// The daylight of this true RGB (the sun's colour), exactly; a Planckian radiator of its
     /// CCT times a smooth modulation where daylight would go negative (a red sun).
     Colour {
+        /// The sun's colour as true linear RGB (referenced to the space's white).
         rgb: [f64; 3],
+        /// The sun's correlated colour temperature (K).
         cct_k: f64,
     },
+    /// A given SPD (a named light, CIE D65, daylight or Planckian at the sun's CCT).
     Spd(Tabulated),
 }
 
@@ -306,6 +318,7 @@ impl CarrierEngine {
         })
     }
 
+    /// How pixels are measured (luminance, round trip).
     pub fn metric(&self) -> &RgbMetric {
         &self.metric
     }

@@ -17,8 +17,10 @@ use std::path::{Path, PathBuf};
 pub struct FilePlan {
     /// The file written (None: nothing is, as `inspect` plans).
     pub path: Option<PathBuf>,
+    /// The file's form and precision.
     pub output: Output,
     #[serde(serialize_with = "compression_name")]
+    /// The OpenEXR compression of every block.
     pub compression: Compression,
     /// The zlib level of ZIP/ZIPS.
     pub zip_level: u8,
@@ -33,12 +35,17 @@ pub struct FilePlan {
 pub enum Output {
     /// One channel per wavelength (Fichet et al. 2021), R, G, B previews and a sun mask, in the
     /// precision and EV scale the map's spectra need.
-    Spectral { precision: Precisions },
+    Spectral {
+        /// The precision and EV scale decided for the spectra.
+        precision: Precisions,
+    },
     /// The spectral form written first, as float without an EV scale, at `intermediate` (None:
     /// nothing is written), then factored into K spectra of its own (see [`super::basis_form`]),
     /// written in `precision` with an EV scale chosen from the coefficients' bound.
     Basis {
+        /// Where the spectral form is written first (None: nothing is written).
         intermediate: Option<PathBuf>,
+        /// The basis form's precision (its EV scale follows from the coefficients).
         precision: Precision,
     },
 }
@@ -128,6 +135,7 @@ fn attributes_json<S: serde::Serializer>(
 /// What the EV scale and the precision came to.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct Precisions {
+    /// Half or float.
     pub precision: Precision,
     /// Values were divided by 2^EV to fit half floats (None: not needed).
     pub ev: Option<f64>,

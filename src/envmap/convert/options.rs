@@ -13,7 +13,9 @@ use std::path::PathBuf;
 /// The main light: a spectrum name, or chosen from the scene.
 #[derive(Debug, Clone, PartialEq)]
 pub enum LightSpec {
+    /// A table name or a CSV file.
     Named(String),
+    /// Chosen from the scene.
     Auto,
 }
 
@@ -47,6 +49,7 @@ pub enum Method {
 /// What RGB (1,1,1) is (see [`crate::envmap::convert::pixel_spectra::WhitePremise`]), or chosen from the scene.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum WhiteSpec {
+    /// The main light (the map is white-balanced to it: the paper's premise).
     Light,
     /// The RGB space's own white.
     Space,
@@ -92,6 +95,7 @@ pub struct ConvertOptions {
     /// `auto`: the scene's lights; a name: the spectrum of the lamps (the sun, sky and windows
     /// keep daylight), or with [`Lights::One`] of every non-sun pixel.
     pub light: LightSpec,
+    /// The scene's lights, or the paper's one main light.
     pub lights: Lights,
     /// How the reflectors' light is estimated (see [`crate::envmap::scene::reflectors`]).
     pub reflectors: ReflectorModel,
@@ -100,6 +104,7 @@ pub struct ConvertOptions {
     /// The fit's mode: the ColorChecker basis of [`Method::Basis`], and the fallback of
     /// [`Method::Faithful`] where the smooth modulation would go negative.
     pub mode: Mode,
+    /// How pixels become spectra.
     pub method: Method,
     /// None: the method's default (faithful: auto; basis: light, or auto with `--light auto`).
     pub white: Option<WhiteSpec>,
@@ -113,8 +118,11 @@ pub struct ConvertOptions {
     /// `space` was asked for (`--space`, a fit's space): it replaces the file's chromaticities,
     /// with a note when they differ.
     pub space_overrides_file: bool,
+    /// The three reflectance tables of the basis (the paper's ColorChecker red, green, blue).
     pub basis: [String; 3],
+    /// The colour-matching functions colours are computed with.
     pub observer: Observer,
+    /// How spectra are integrated over the grid.
     pub rule: Rule,
     /// None: no sun detection.
     pub sun: Option<SunSettings>,
@@ -133,9 +141,13 @@ pub struct ConvertOptions {
     /// How the input's directions relate to OpenEXR's (Y up): a Z-up map or a turn about the
     /// up axis. Anything but the identity resamples the map into OpenEXR's orientation.
     pub orientation: Orientation,
+    /// The output's wavelengths (nm).
     pub grid: WavelengthGrid,
+    /// Spectral channels, or the basis form.
     pub format: OutputFormat,
+    /// Half or float (half gets an EV scale where values exceed its range).
     pub precision: Precision,
+    /// The OpenEXR compression.
     pub compression: Compression,
     /// The zlib level of ZIP/ZIPS (OpenEXR's default 4; 1 is fastest, 12 smallest).
     pub zip_level: u8,

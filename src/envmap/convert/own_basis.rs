@@ -136,12 +136,16 @@ pub struct Projection {
 /// The colour-matching functions on a file's wavelengths: per band the luminance weight
 /// (specmap's convention, `Y = sum L ybar / sum ybar`) and the x, y, z integration weights.
 pub struct BandColour {
+    /// ybar on the file's wavelengths.
     pub ybar: Vec<f64>,
+    /// The sum of `ybar` (the luminance scale's denominator).
     pub ybar_sum: f64,
+    /// Per band, the x, y, z integration weights (the CMFs times the band's width).
     pub weights: Vec<[f64; 3]>,
 }
 
 impl BandColour {
+    /// The weights for the wavelengths `wl` (nm), the CIE 1931 observer sampled smoothly at them.
     pub fn new(wl: &[f64]) -> Result<BandColour> {
         let grid = WavelengthGrid::visible_1nm();
         let cmfs = Cmfs::new(Observer::Cie1931, &grid)?;
@@ -167,6 +171,7 @@ impl BandColour {
         })
     }
 
+    /// Luminance of the spectrum `s` on the file's wavelengths.
     pub fn luminance(&self, s: &[f64]) -> f64 {
         s.iter().zip(&self.ybar).map(|(a, b)| a * b).sum::<f64>() / self.ybar_sum
     }
@@ -234,6 +239,7 @@ impl OwnBasis {
         self.spectra.len()
     }
 
+    /// Whether there are no spectra.
     pub fn is_empty(&self) -> bool {
         self.spectra.is_empty()
     }

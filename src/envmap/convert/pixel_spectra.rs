@@ -59,6 +59,7 @@ pub enum PixelKind {
 /// The model the engine follows beyond the fit.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Model {
+    /// What RGB (1,1,1) is: the main light or the space's white.
     pub white: WhitePremise,
     /// Daylight-coloured sky pixels as members of the CIE daylight family.
     pub sky_daylight: bool,
@@ -232,8 +233,11 @@ pub struct Engine {
 /// Where each set of spectra sits in [`Engine::spectra_table`]: three ColorChecker x light,
 /// three CIE daylight, three smooth x light, the sun.
 pub const TABLE_COLORCHECKER: usize = 0;
+/// Where the three CIE daylight spectra (S0, S1, S2) start.
 pub const TABLE_DAYLIGHT: usize = 3;
+/// Where the three smooth-modulation spectra start.
 pub const TABLE_SMOOTH: usize = 6;
+/// Where the sun's spectrum is.
 pub const TABLE_SUN: usize = 9;
 /// The number of spectra in [`Engine::spectra_table`].
 pub const TABLE_LEN: usize = 10;
@@ -243,8 +247,11 @@ pub const TABLE_LEN: usize = 10;
 /// exactly as the spectrum written by [`Engine::spectrum`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Combination {
+    /// Index of the first spectrum in the table.
     pub first: usize,
+    /// How many spectra (from `first`) the pixel combines.
     pub count: usize,
+    /// The weights of those spectra.
     pub weights: [f32; 3],
 }
 
@@ -276,9 +283,13 @@ pub struct PixelResult {
 /// Which spectrum a pixel got.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Took {
+    /// The sun's SPD.
     Sun,
+    /// A member of the CIE daylight family.
     Daylight,
+    /// The main light times a smooth modulation.
     Smooth,
+    /// The main light times the ColorChecker basis (the paper's).
     Colorchecker,
     /// The carrier times a non-negative Bernstein combination, exact in RGB.
     Nonneg,
@@ -514,6 +525,7 @@ impl Engine {
         })
     }
 
+    /// The output grid.
     pub fn grid(&self) -> &WavelengthGrid {
         &self.grid
     }
@@ -523,6 +535,7 @@ impl Engine {
         &self.metric
     }
 
+    /// The model the engine follows.
     pub fn model(&self) -> Model {
         self.model
     }

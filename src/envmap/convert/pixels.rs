@@ -12,10 +12,17 @@ use crate::fit::Mode;
 #[derive(Debug, Clone)]
 pub enum PixelPlan {
     /// The paper's modes: one fit; per analysis cell, whether it is the sun's.
-    Basis { engine: Box<Engine>, sun: Vec<bool> },
+    Basis {
+        /// The fit's per-pixel engine.
+        engine: Box<Engine>,
+        /// Per analysis cell, whether it is the sun's.
+        sun: Vec<bool>,
+    },
     /// The faithful method: carriers, and per analysis cell what it is.
     Carriers {
+        /// The carriers' per-pixel engine.
         engine: Box<CarrierEngine>,
+        /// Per analysis cell, its carrier and what it is (sun, daylight, clipped lamp).
         assign: Vec<Assign>,
     },
 }

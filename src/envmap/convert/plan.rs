@@ -25,17 +25,24 @@ use std::path::Path;
 /// Every decision of the write.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct Plan {
+    /// How pixels become spectra.
     pub method: Method,
+    /// The scene's lights, or the paper's one main light.
     pub lights: Lights,
+    /// What daylight-coloured sky pixels take.
     pub sky: SkySpd,
     /// The sun's spectrum, if a sun was found.
     pub sun_spd: Option<String>,
+    /// The output's wavelengths (nm).
     pub grid: WavelengthGrid,
+    /// What `--tolerance` chose (None: the grid was given).
     pub grid_choice: Option<GridChoice>,
+    /// Spectral channels, or the basis form.
     pub format: OutputFormat,
     /// The distinct light spectra pixels are carried by (faithful method), and how many mixes
     /// of them the reflectors take.
     pub carriers: Vec<String>,
+    /// How many mixes of the carriers light the reflectors.
     pub mixes: usize,
     /// What the conversion could not do as asked, in words.
     pub notes: Vec<String>,
@@ -44,6 +51,7 @@ pub struct Plan {
     /// The basis fit: the paper's weights and matrix for the main light.
     pub fit: Fit,
     #[serde(skip)]
+    /// How each pixel becomes a spectrum.
     pub pixels: PixelPlan,
     /// The map as it is written (out-of-gamut colours kept under the space premise) and what
     /// reading it found.

@@ -40,16 +40,19 @@ pub enum SpaceSource {
 pub struct SpaceChoice {
     /// The space's name (`declared`: the file's chromaticities, which no named space has).
     pub name: &'static str,
+    /// The xy of its primaries and white.
     pub chromaticities: Chromaticities,
     /// What RGB (1,1,1) is in the space, in words, e.g. "D50 (x 0.34570, y 0.35850)". It is
     /// taken unadapted: a spectrum has the XYZ the space's RGB -> XYZ matrix gives.
     pub white: String,
+    /// Where the space comes from.
     pub source: SpaceSource,
     /// What the file declares, when that is not the space used.
     pub declared: Option<Chromaticities>,
     /// Why the space differs from the file's, in words.
     pub note: Option<String>,
     #[serde(skip)]
+    /// The space itself.
     pub space: RgbSpace,
 }
 
@@ -104,10 +107,15 @@ pub type OutOfGamut = (usize, [f32; 3]);
 /// The map as read, sanitised and laid out for the output.
 #[derive(Debug, Clone)]
 pub struct Input {
+    /// The map, sanitised and laid out for the output.
     pub map: EnvMap,
+    /// The input in words (format, compression, channels).
     pub description: String,
+    /// The input's layout.
     pub layout: Layout,
+    /// The input's size in pixels (width, height).
     pub size: [usize; 2],
+    /// What sanitising changed.
     pub sanitized: Sanitized,
     /// The RGB space the map's values are in.
     pub space: SpaceChoice,
@@ -115,6 +123,7 @@ pub struct Input {
     pub out_of_gamut: Vec<OutOfGamut>,
     /// The map was resampled (layout, size or orientation changed).
     pub resampled: bool,
+    /// Seconds spent reading.
     pub seconds: f64,
 }
 

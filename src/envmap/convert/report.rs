@@ -20,26 +20,34 @@ use crate::tradeoff::GridChoice;
 /// The sun, as the report gives it.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct SunReport {
+    /// Whether a sun was found.
     pub found: bool,
     /// Why it is the sun, or why the brightest region is not.
     pub reason: String,
     #[serde(flatten)]
+    /// The sun, if found.
     pub sun: Option<SunFound>,
 }
 
 /// A sun found in the map.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct SunFound {
+    /// Pixels of the sun.
     pub pixel_count: usize,
     /// Energy-weighted mean direction (unit vector, OpenEXR's axes: Y up).
     pub direction: [f64; 3],
+    /// Degrees above the horizon.
     pub elevation_deg: f64,
     /// Angle from +Z towards +X (degrees).
     pub azimuth_deg: f64,
+    /// Solid angle of its pixels (sr).
     pub solid_angle_sr: f64,
+    /// Share of the map's energy (luminance x solid angle).
     pub energy_share: f64,
     #[serde(rename = "cct_K")]
+    /// Correlated colour temperature (K), if it has one.
     pub cct_k: Option<f64>,
+    /// Distance from the Planckian locus (CIE 1960 uv).
     pub duv: f64,
     /// Pixels at the clip level: the sun's energy is an underestimate, its colour taken from
     /// its unclipped glow.
@@ -47,6 +55,7 @@ pub struct SunFound {
 }
 
 impl SunReport {
+    /// The sun of `scene`, or why there is none.
     pub fn of(scene: &Scene) -> SunReport {
         match scene.sun() {
             Some(s) => SunReport {
@@ -81,30 +90,44 @@ impl SunReport {
 /// What a conversion did.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct ConvertReport {
+    /// The input map as given.
     pub input: String,
+    /// The input in words (format, compression, channels).
     pub input_description: String,
+    /// The input's layout.
     pub input_layout: Layout,
+    /// The input's size in pixels (width, height).
     pub input_size: [usize; 2],
+    /// The file written.
     pub output: String,
+    /// The output's layout.
     pub output_layout: Layout,
+    /// The output's size in pixels (width, height).
     pub output_size: [usize; 2],
+    /// Spectral channels, or the basis form.
     pub format: OutputFormat,
+    /// `half` or `float`.
     pub precision: &'static str,
+    /// The OpenEXR compression (`zip`, `piz`...).
     pub compression: String,
     /// Values were divided by 2^EV to fit half floats (None: not needed).
     pub ev: Option<f64>,
     /// Pixels whose every value is below half's smallest positive value (written as 0).
     pub below_half: usize,
+    /// What sanitising changed.
     pub sanitized: Sanitized,
     /// The input's RGB space, and where it comes from.
     pub space: SpaceChoice,
     /// Every light of the scene (see [`crate::envmap::scene::Light`]).
     pub lights: Vec<Light>,
+    /// The sun found, or why there is none.
     pub sun: SunReport,
+    /// The sun's SPD, if a sun was found.
     pub sun_spd: Option<String>,
     /// The main light: every non-sun pixel's with `--lights one` and in the paper's modes; the
     /// dominant light of the scene otherwise (the fit's light).
     pub light: String,
+    /// How `--light auto` chose the main light.
     pub light_choice: Option<LightChoice>,
     /// `faithful`, or the paper's modes `paper`, `exact`, `nonneg`.
     pub mode: String,
@@ -112,13 +135,17 @@ pub struct ConvertReport {
     pub lights_mode: Lights,
     /// What RGB (1,1,1) was taken to be, and why.
     pub white: WhiteChoice,
+    /// What daylight-coloured sky pixels took.
     pub sky: SkySpd,
     /// The light spectra pixels are carried by, and how many mixes of them reflectors take.
     pub carriers: Vec<String>,
+    /// How many mixes of the carriers light the reflectors.
     pub carrier_mixes: usize,
+    /// How the reflectors' light was estimated.
     pub reflectors: ReflectorModel,
     /// Bright regions that are not lights, and why.
     pub bright_reflectors: Vec<String>,
+    /// How many pixels got which spectrum.
     pub spectra: SpectraCount,
     /// The basis form: how its K spectra hold the conversion's spectra.
     pub basis: Option<BasisStats>,
@@ -128,24 +155,34 @@ pub struct ConvertReport {
     pub inexact: RoundTripStats,
     /// What the conversion could not do as asked, in words.
     pub notes: Vec<String>,
+    /// The paper's w_R, w_G, w_B for the main light.
     pub weights: [f64; 3],
+    /// The 2-norm condition number of the basis' RGB matrix.
     pub condition_number: f64,
+    /// The basis was too ill-conditioned to invert: the reduced solution was used.
     pub regularized: bool,
+    /// The output's wavelengths (nm).
     pub wavelengths_nm: Vec<f64>,
+    /// Channels per pixel in the file.
     pub channels: usize,
+    /// Bytes written.
     pub bytes: u64,
     /// The luminance floor of the round-trip statistics (see [`Floor`]).
     pub roundtrip_floor: Floor,
     /// Over all pixels, and over those not replaced by the sun's SPD (see
     /// [`crate::envmap::roundtrip::stats`]: the statistic `specmap roundtrip` reports).
     pub roundtrip: RoundTripStats,
+    /// Over the pixels not given the sun's SPD.
     pub roundtrip_without_sun: RoundTripStats,
+    /// Seconds spent reading the input.
     pub seconds_read: f64,
+    /// Seconds spent converting and writing.
     pub seconds_convert: f64,
     /// The part of `seconds_convert` spent encoding and compressing the EXR blocks.
     pub seconds_encode: f64,
     /// What `--tolerance` chose (None: the grid was given).
     pub grid_choice: Option<GridChoice>,
+    /// Input megapixels converted per second, reading included.
     pub megapixels_per_second: f64,
 }
 
@@ -235,22 +272,37 @@ fn written_precision(plan: &Plan, written: &WriteStats) -> (&'static str, Option
 /// The analysis and the plan of a conversion, without writing anything (`specmap inspect`).
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct Inspection {
+    /// The input map as given.
     pub input: String,
+    /// The input in words (format, compression, channels).
     pub input_description: String,
+    /// The input's layout.
     pub input_layout: Layout,
+    /// The input's size in pixels (width, height).
     pub input_size: [usize; 2],
+    /// What sanitising changed.
     pub sanitized: Sanitized,
     /// Every light of the scene (as `convert --json` has them).
     pub lights: Vec<Light>,
+    /// The sun found, or why there is none.
     pub sun: SunReport,
+    /// The main light (as `convert --json` has it).
     pub light: String,
+    /// How `--light auto` chose the main light.
     pub light_choice: Option<LightChoice>,
+    /// What RGB (1,1,1) is taken to be, and why.
     pub white: WhiteChoice,
+    /// The map's luminance levels (median, clip level...).
     pub levels: Levels,
+    /// Bright regions that are not lights, and why.
     pub bright_reflectors: Vec<String>,
+    /// The reflectors' share of the map's energy.
     pub reflector_energy_share: f64,
+    /// How the reflectors are lit: the carriers and the mix around each pixel.
     pub reflectors: Reflectors,
+    /// `faithful`, or the paper's modes `paper`, `exact`, `nonneg`.
     pub mode: String,
+    /// Every decision of the conversion.
     pub plan: Plan,
     /// The scene (for drawing over the map, [`Inspection::map`]).
     #[serde(skip)]

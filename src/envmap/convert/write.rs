@@ -26,6 +26,7 @@ const BATCH_BYTES: usize = 96 << 20;
 /// How many pixels got which spectrum.
 #[derive(Debug, Clone, Copy, Default, serde::Serialize)]
 pub struct SpectraCount {
+    /// The sun's SPD.
     pub sun: usize,
     /// CIE daylight family (sky, windows, daylight-coloured pixels as bright as them).
     pub daylight: usize,
@@ -92,12 +93,17 @@ impl Tally {
 /// What the write did.
 #[derive(Debug, Clone)]
 pub struct WriteStats {
+    /// Channels per pixel in the file.
     pub channels: usize,
+    /// Bytes written.
     pub bytes: u64,
+    /// How many pixels got which spectrum.
     pub spectra: SpectraCount,
     /// The luminance floor of the round-trip statistics (the map's).
     pub roundtrip_floor: Floor,
+    /// Over all pixels.
     pub roundtrip: RoundTripStats,
+    /// Over the pixels not given the sun's SPD.
     pub roundtrip_without_sun: RoundTripStats,
     /// Over the pixels whose spectrum could not reproduce their RGB.
     pub roundtrip_inexact: RoundTripStats,
@@ -105,7 +111,9 @@ pub struct WriteStats {
     pub basis: Option<BasisStats>,
     /// What the write found it could not keep, in words.
     pub notes: Vec<String>,
+    /// Seconds spent converting and writing.
     pub seconds: f64,
+    /// The part of `seconds` spent encoding and compressing the EXR blocks.
     pub seconds_encode: f64,
 }
 
