@@ -9,9 +9,11 @@ use std::path::Path;
 /// later run trust an unchanged file without reading it (as make and git's index do).
 #[derive(Debug, Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct Fingerprint {
+    /// The file's size in bytes.
     pub bytes: u64,
     /// Nanoseconds since the Unix epoch (None where the file system keeps no time).
     pub modified_ns: Option<i64>,
+    /// BLAKE3 hash of the contents, in lowercase hex (64 digits).
     pub blake3: String,
 }
 

@@ -23,6 +23,7 @@ pub struct Item {
 /// The expanded inputs, sorted by output name, and how many paths were given more than once.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Expanded {
+    /// The maps to convert, each once, sorted by output name.
     pub items: Vec<Item>,
     /// Inputs named more than once (e.g. a file and its folder): converted once.
     pub duplicates: usize,

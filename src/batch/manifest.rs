@@ -24,9 +24,11 @@ pub fn manifest_name(shard: Option<Shard>) -> String {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Status {
+    /// Converted by this run: its output was written.
     Converted,
     /// Its output was up to date.
     Skipped,
+    /// Not converted: reading, converting or recording it failed (see [`Record::error`]).
     Failed,
 }
 
@@ -37,6 +39,7 @@ pub struct Record {
     pub input: String,
     /// The output, relative to the manifest's folder.
     pub output: String,
+    /// What became of it.
     pub status: Status,
     /// Why it failed (the error and its causes).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -51,8 +54,10 @@ pub struct Record {
     pub seconds: f64,
     /// The output's size in bytes (None when failed).
     pub bytes: Option<u64>,
+    /// The run's shard, as "I/N" (None: the run was not sharded).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shard: Option<String>,
+    /// The version of specmap that wrote the line.
     pub specmap: String,
     /// When the line was written, in seconds since the Unix epoch.
     pub finished_unix: f64,
@@ -100,6 +105,7 @@ impl Manifest {
         })
     }
 
+    /// The manifest file's path.
     pub fn path(&self) -> &Path {
         &self.path
     }

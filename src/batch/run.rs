@@ -14,6 +14,7 @@ use std::time::Instant;
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 #[serde(tag = "decision", content = "reason", rename_all = "lowercase")]
 pub enum Decision {
+    /// To convert, with the reason (e.g. "no output yet", "the input changed", "--force").
     Convert(String),
     /// Up to date: the manifest's record of the conversion that made the output.
     Skip(Box<Record>),
@@ -22,7 +23,9 @@ pub enum Decision {
 /// An input and its decision.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Planned {
+    /// The input and its output name.
     pub item: Item,
+    /// Whether it is converted or skipped, and why.
     pub decision: Decision,
 }
 
@@ -105,13 +108,19 @@ pub enum Event<'a> {
 /// What a batch did.
 #[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
 pub struct Summary {
+    /// Inputs planned: converted, skipped and failed together.
     pub inputs: usize,
+    /// Inputs converted.
     pub converted: usize,
+    /// Inputs skipped as up to date.
     pub skipped: usize,
+    /// Inputs that failed (reading, converting or recording them).
     pub failed: usize,
     /// Bytes written by this run's conversions.
     pub bytes_written: u64,
+    /// Wall-clock seconds of the whole run.
     pub seconds: f64,
+    /// The path of the manifest this run appended to.
     pub manifest: String,
 }
 

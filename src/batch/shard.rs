@@ -6,7 +6,9 @@ use crate::error::{Error, Result};
 /// Share `index` of `count` (0 <= index < count).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 pub struct Shard {
+    /// Which share, I: from 0 to `count - 1`.
     pub index: usize,
+    /// How many shares, N (at least 1).
     pub count: usize,
 }
 
