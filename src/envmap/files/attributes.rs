@@ -11,9 +11,13 @@ use exr::meta::header::Header;
 /// A header attribute value.
 #[derive(Debug, Clone, PartialEq)]
 pub enum AttrValue {
+    /// OpenEXR's `string` attribute type.
     Text(String),
+    /// OpenEXR's `double` attribute type.
     F64(f64),
+    /// OpenEXR's `float` attribute type.
     F32(f32),
+    /// OpenEXR's `int` attribute type.
     I32(i32),
     /// Written as OpenEXR's `floatvector` attribute type.
     F32Vec(Vec<f32>),

@@ -23,8 +23,11 @@ pub trait LineSource: Sync {
 
 /// Rows of pixels with `per_pixel` interleaved values each (the caller's order).
 pub struct Interleaved<'a> {
+    /// The rows' values, row-major from the source's first row, `per_pixel` per pixel.
     pub rows: &'a [f32],
+    /// Row length in pixels.
     pub width: usize,
+    /// Values per pixel.
     pub per_pixel: usize,
 }
 
@@ -41,18 +44,23 @@ impl LineSource for Interleaved<'_> {
 
 /// What every block of a file shares.
 pub struct BlockFormat<'a> {
+    /// The file being written (named in errors).
     pub dest: &'a Path,
+    /// Image width in pixels.
     pub width: usize,
     /// For each channel in file order: its index in the caller's per-pixel order.
     pub file_order: &'a [usize],
     /// Channel names in the caller's order (for errors).
     pub names: &'a [String],
+    /// Whether samples are stored as half floats (else as 32-bit floats).
     pub half: bool,
     /// Every value is multiplied by this (2^-EV) before it is stored...
     pub scale: f32,
     /// ...but in the channels (file order) whose scale here is 1: masks stay 0/1.
     pub scales: &'a [f32],
+    /// The file's compression.
     pub compression: Compression,
+    /// Scan lines per block (the compression's; the last block of the image may have fewer).
     pub lines_per_block: usize,
     /// The file's header, for the `exr` crate's compressors.
     pub headers: &'a exr::meta::Headers,

@@ -50,12 +50,15 @@ pub enum Precision {
 /// OpenEXR compression for writing (DWAA/DWAB are read-only in the `exr` crate).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Compression {
+    /// Uncompressed, one scan line per block.
     None,
+    /// Run-length encoding (lossless), one scan line per block.
     Rle,
     /// Zlib, 16 scan lines per block.
     Zip,
     /// Zlib, one scan line per block.
     Zips,
+    /// Wavelet (lossless), 32 scan lines per block.
     Piz,
     /// Lossy for float channels (24-bit mantissa truncation), lossless for half.
     Pxr24,
@@ -91,7 +94,9 @@ impl Compression {
 pub enum ChannelSet {
     /// Emissive bands `S0.<nm>nm` in the given wavelength order, then (if `preview_rgb`) R, G, B.
     Spectral {
+        /// Band wavelengths in nm, in the caller's per-pixel order.
         wavelengths_nm: Vec<f64>,
+        /// Whether R, G, B preview channels follow the bands in each pixel.
         preview_rgb: bool,
     },
     /// Channels with the caller's names (e.g. c_R, c_G, c_B, sun), in the given order.
@@ -123,11 +128,17 @@ impl ChannelSet {
 /// Everything that defines a written spectral (or custom-channel) OpenEXR file.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SpectralLayout {
+    /// Width in pixels.
     pub width: usize,
+    /// Height in pixels.
     pub height: usize,
+    /// The channels, in the order the caller gives each pixel's values.
     pub channels: ChannelSet,
+    /// Sample precision of every channel.
     pub precision: Precision,
+    /// The file's compression.
     pub compression: Compression,
+    /// The `envmap` attribute to write (None: none, a plain image).
     pub envmap: Option<EnvmapAttr>,
     /// When set, every stored value is the given value divided by 2^ev, and the header carries
     /// `EV` = ev (float); `read_spectral_rows` multiplies it back.

@@ -26,6 +26,7 @@ const MAX_PIXELS: usize = 1 << 31;
 /// An RGB image read from a file, with what the file says about itself.
 #[derive(Debug, Clone)]
 pub struct InputImage {
+    /// The pixels, linear RGB as the file stores them (a grey `Y` file's value in all three).
     pub image: RgbImage,
     /// The `envmap` attribute (OpenEXR only; `None` when absent or for HDR files).
     pub envmap: Option<EnvmapAttr>,

@@ -19,12 +19,15 @@ use std::path::Path;
 /// What [`read_spectral_rows`] found in a spectral OpenEXR file.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SpectralInfo {
+    /// Width in pixels.
     pub width: usize,
+    /// Height in pixels.
     pub height: usize,
     /// The `S0.<nm>nm` bands, sorted by wavelength.
     pub wavelengths_nm: Vec<f64>,
     /// Whether R, G, B preview channels follow the bands in each pixel.
     pub has_rgb: bool,
+    /// The `envmap` attribute (None: absent).
     pub envmap: Option<EnvmapAttr>,
     /// The `EV` attribute (already applied to the values passed to the callback).
     pub ev: Option<f64>,
