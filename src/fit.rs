@@ -50,20 +50,30 @@ pub enum Mode {
 /// What a fit starts from: the main light and the three basis reflectances, on one grid.
 #[derive(Debug, Clone)]
 pub struct FitInput {
+    /// How the main light was named (for messages and the fit file).
     pub light_label: String,
+    /// The main light's SPD, on the grid every spectrum here shares.
     pub light: Spectrum,
+    /// How each basis reflectance was named, in R, G, B order.
     pub basis_labels: [String; 3],
+    /// The basis reflectances MCC_R, MCC_G, MCC_B on the light's grid.
     pub basis: [Spectrum; 3],
+    /// The colour-matching functions RGB is computed with.
     pub observer: Observer,
+    /// The integration rule over the grid.
     pub rule: Rule,
+    /// The RGB space the input colours are in.
     pub space: RgbSpace,
 }
 
 /// The argmin solution of the same objective, and how far it is from the closed form.
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct ArgminCheck {
+    /// The weights w_R, w_G, w_B that argmin found.
     pub weights: [f64; 3],
+    /// Iterations argmin took.
     pub iterations: u64,
+    /// Largest absolute difference between the argmin and closed-form weights.
     pub max_abs_difference: f64,
 }
 
@@ -72,12 +82,19 @@ pub struct ArgminCheck {
 pub struct Fit {
     /// File format version of the serialised fit.
     pub version: u32,
+    /// How RGB becomes a spectrum.
     pub mode: Mode,
+    /// Name of the main light, as given.
     pub light: String,
+    /// Names of the basis reflectances, in R, G, B order.
     pub basis: [String; 3],
+    /// The wavelengths every spectrum of the fit is on.
     pub grid: WavelengthGrid,
+    /// The colour-matching functions the fit was solved with.
     pub observer: Observer,
+    /// The integration rule over `grid`.
     pub rule: Rule,
+    /// Name of the RGB space (or "declared", see `chromaticities`).
     pub space: String,
     /// The primaries and white of a space without a name (`space` is "declared": the input
     /// file's own chromaticities); absent for the named spaces.
@@ -99,6 +116,7 @@ pub struct Fit {
     /// In plain words, the colour information that cannot survive under this light (None when
     /// all of it does).
     pub lost_information: Option<String>,
+    /// The same weights found by argmin, as a check on the closed form.
     pub argmin: ArgminCheck,
     /// The main light's SPD on `grid`.
     pub light_spd: Vec<f64>,
@@ -106,6 +124,7 @@ pub struct Fit {
     pub basis_reflectance: [Vec<f64>; 3],
 }
 
+/// The fit file format version this build writes and reads.
 pub const FIT_VERSION: u32 = 1;
 
 /// The paper's basis: the ColorChecker's red, green and blue patches.
@@ -590,12 +609,15 @@ impl Fit {
 /// Round-trip statistics over an RGB grid.
 #[derive(Debug, Clone, Copy, serde::Serialize)]
 pub struct RoundTrip {
+    /// Colours in the grid: n^3 less black.
     pub colours: usize,
+    /// Mean CIEDE2000 over the colours.
     #[serde(rename = "mean_dE2000")]
     pub mean_de2000: f64,
     /// Nearest-rank 95th percentile.
     #[serde(rename = "p95_dE2000")]
     pub p95_de2000: f64,
+    /// Largest CIEDE2000 over the colours.
     #[serde(rename = "max_dE2000")]
     pub max_de2000: f64,
     /// Share of the colours whose SPD goes negative at some wavelength.

@@ -38,7 +38,9 @@ use std::str::FromStr;
 /// Y up; the lat-long centre column looks down +Z) and the name it was given by.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Normal {
+    /// The name it was given by (`up`, `px`, ..., or the `X:Y:Z` text).
     pub name: String,
+    /// Unit direction in the map's world space.
     pub direction: [f64; 3],
 }
 
@@ -103,9 +105,13 @@ impl FromStr for Normal {
 /// The irradiance of one spectral map at a set of normals, on the map's own wavelengths.
 #[derive(Debug, Clone)]
 pub struct MapIrradiance {
+    /// The map's path, as given.
     pub file: String,
+    /// Width in pixels.
     pub width: usize,
+    /// Height in pixels.
     pub height: usize,
+    /// The environment layout the map was read as.
     pub layout: Layout,
     /// The map's bands, increasing.
     pub wavelengths_nm: Vec<f64>,
@@ -181,8 +187,11 @@ pub fn map_irradiance(path: &Path, normals: &[Normal]) -> Result<MapIrradiance> 
 /// How [`rendition`] measures.
 #[derive(Debug, Clone)]
 pub struct RenditionOptions {
+    /// The normals the patches are lit at (default: [`Normal::defaults`]).
     pub normals: Vec<Normal>,
+    /// The colour-matching functions everything is integrated against.
     pub observer: Observer,
+    /// The integration rule over the shared wavelengths.
     pub rule: Rule,
     /// A reflectance table whose every column is a test patch (default `colorchecker`).
     pub patches: String,
@@ -202,12 +211,19 @@ impl Default for RenditionOptions {
 /// What a map is, as the report shows it.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct MapSummary {
+    /// The map's path, as given.
     pub file: String,
+    /// Width in pixels.
     pub width: usize,
+    /// Height in pixels.
     pub height: usize,
+    /// The environment layout the map was read as.
     pub layout: Layout,
+    /// Number of spectral bands.
     pub bands: usize,
+    /// First and last band, nm.
     pub range_nm: [f64; 2],
+    /// Samples that were NaN or infinite (counted as 0).
     pub nonfinite_values: usize,
 }
 
@@ -233,59 +249,81 @@ impl MapSummary {
 pub struct White {
     /// Y = 100.
     pub xyz: Xyz,
+    /// Chromaticity x, y of `xyz`.
     pub xy: [f64; 2],
     /// Correlated colour temperature (None beyond 0.05 from the Planckian locus).
     pub cct_k: Option<f64>,
+    /// Distance to the Planckian locus in CIE 1960 uv, positive above it (greenish).
     pub duv: f64,
 }
 
 /// One patch at one normal.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct PatchResult {
+    /// The patch's name: its column in the reflectance table.
     pub patch: String,
-    /// CIELAB after adaptation to D65, truth and reconstruction.
+    /// The truth's CIELAB after adaptation to D65.
     pub truth_lab: Lab,
+    /// The reconstruction's CIELAB after adaptation to D65.
     pub reconstructed_lab: Lab,
+    /// CIEDE2000 between truth and reconstruction.
     pub de2000: f64,
 }
 
 /// Everything measured at one normal.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct NormalResult {
+    /// The normal the patches are lit at.
     pub normal: Normal,
+    /// The truth's white at this normal.
     pub truth_white: White,
+    /// The reconstruction's white at this normal.
     pub reconstructed_white: White,
     /// Luminous irradiance of the reconstruction over the truth's (∫E ȳ, no adaptation): 1 when
     /// the reconstruction is as bright as the truth.
     pub irradiance_ratio: f64,
     /// The reconstruction's white as seen adapted to the truth's white.
     pub white_de2000: f64,
+    /// Mean CIEDE2000 over the patches.
     pub mean_de2000: f64,
+    /// Largest CIEDE2000 over the patches.
     pub max_de2000: f64,
+    /// Name of the patch with the largest CIEDE2000.
     pub max_patch: String,
+    /// Every patch, in the table's column order.
     pub patches: Vec<PatchResult>,
 }
 
 /// The whole comparison.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct Rendition {
+    /// The ground-truth map.
     pub truth: MapSummary,
+    /// The reconstructed map.
     pub reconstructed: MapSummary,
     /// The shared wavelengths everything is integrated on.
     pub wavelengths: WavelengthGrid,
+    /// The colour-matching functions used.
     pub observer: Observer,
+    /// The integration rule used.
     pub rule: Rule,
+    /// Name of the reflectance table the patches came from.
     pub patches: String,
+    /// How each rendering was adapted before CIELAB, in words.
     pub adaptation: &'static str,
+    /// How the two whites were compared, in words.
     pub white_comparison: &'static str,
-    /// Over every patch and normal.
+    /// Mean CIEDE2000 over every patch and normal.
     pub mean_de2000: f64,
+    /// Largest CIEDE2000 over every patch and normal.
     pub max_de2000: f64,
     /// Normal name and patch of the maximum.
     pub max_at: [String; 2],
-    /// Over the normals.
+    /// Mean white CIEDE2000 over the normals.
     pub white_mean_de2000: f64,
+    /// Largest white CIEDE2000 over the normals.
     pub white_max_de2000: f64,
+    /// Every normal, in the order given.
     pub normals: Vec<NormalResult>,
 }
 

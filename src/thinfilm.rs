@@ -199,10 +199,20 @@ pub enum Material {
     /// The same index at every wavelength.
     Constant(Index),
     /// Cauchy: `n = A + B / lambda^2 + C / lambda^4` with lambda in micrometres, `k = 0`.
-    Cauchy { a: f64, b: f64, c: f64 },
+    Cauchy {
+        /// A (dimensionless).
+        a: f64,
+        /// B in µm².
+        b: f64,
+        /// C in µm⁴.
+        c: f64,
+    },
     /// Sellmeier: `n^2 = 1 + sum_i B_i lambda^2 / (lambda^2 - C_i)` with lambda in micrometres
     /// (C_i in µm²), `k = 0`.
-    Sellmeier { terms: Vec<(f64, f64)> },
+    Sellmeier {
+        /// The (B_i, C_i) pairs, B_i dimensionless, C_i in µm².
+        terms: Vec<(f64, f64)>,
+    },
     /// Measured `n(lambda)`, `k(lambda)`, interpolated linearly; outside the table the nearest
     /// end value is held constant (the project's convention for every table).
     Table(IndexTable),
@@ -405,12 +415,15 @@ impl Incidence {
         Ok(Incidence { degrees, sin, cos })
     }
 
+    /// The angle from the normal in degrees.
     pub fn as_degrees(&self) -> f64 {
         self.degrees
     }
+    /// Sine of the angle.
     pub fn sin(&self) -> f64 {
         self.sin
     }
+    /// Cosine of the angle (0 at grazing).
     pub fn cos(&self) -> f64 {
         self.cos
     }
@@ -430,8 +443,11 @@ pub enum Wave {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Polarization {
+    /// s (TE) only.
     S,
+    /// p (TM) only.
     P,
+    /// The mean of the s and p responses.
     Unpolarized,
 }
 
@@ -621,6 +637,7 @@ impl<T: Real> Film<T> {
         })
     }
 
+    /// The wavelength the film is evaluated at, nm.
     pub fn wavelength_nm(&self) -> T {
         self.wavelength_nm
     }
@@ -940,9 +957,11 @@ impl Layer {
             thickness_nm: thickness_nm + 0.0,
         })
     }
+    /// The layer's material.
     pub fn material(&self) -> &Material {
         &self.material
     }
+    /// Thickness in nm (non-negative).
     pub fn thickness_nm(&self) -> f64 {
         self.thickness_nm
     }
@@ -969,8 +988,11 @@ pub enum Coherence {
 /// R and T over a wavelength grid.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Response {
+    /// The wavelengths the response is sampled on.
     pub grid: WavelengthGrid,
+    /// Reflectance: the fraction of incident power reflected, one per wavelength.
     pub reflectance: Vec<f64>,
+    /// Transmittance: the fraction of incident power entering the substrate, one per wavelength.
     pub transmittance: Vec<f64>,
     /// Layers (0-based from the ambient side) computed incoherently.
     pub incoherent_layers: Vec<usize>,
@@ -985,6 +1007,7 @@ pub struct Stack {
 }
 
 impl Stack {
+    /// A stack of `layers` (from the ambient side) between `ambient` and `substrate`.
     pub fn new(ambient: Material, layers: Vec<Layer>, substrate: Material) -> Stack {
         Stack {
             ambient,
@@ -993,6 +1016,7 @@ impl Stack {
         }
     }
 
+    /// The layers, from the ambient side.
     pub fn layers(&self) -> &[Layer] {
         &self.layers
     }
