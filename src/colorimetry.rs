@@ -30,6 +30,7 @@ impl std::fmt::Display for Observer {
 }
 
 impl Observer {
+    /// Name of the observer's built-in CMF table (`cie1931`, `cie1964`).
     pub fn table_name(self) -> &'static str {
         match self {
             Observer::Cie1931 => "cie1931",
@@ -41,9 +42,13 @@ impl Observer {
 /// Colour-matching functions resampled onto one grid.
 #[derive(Debug, Clone)]
 pub struct Cmfs {
+    /// The observer the functions belong to.
     pub observer: Observer,
+    /// x̄(λ) on the grid (0 outside the tables' 360-830 nm).
     pub x: Spectrum,
+    /// ȳ(λ) on the grid (0 outside the tables' 360-830 nm).
     pub y: Spectrum,
+    /// z̄(λ) on the grid (0 outside the tables' 360-830 nm).
     pub z: Spectrum,
 }
 
@@ -72,6 +77,7 @@ impl Cmfs {
         })
     }
 
+    /// The wavelengths the functions are sampled on.
     pub fn grid(&self) -> &WavelengthGrid {
         self.x.grid()
     }
@@ -142,15 +148,19 @@ impl Cmfs {
 pub struct Xyz(pub [f64; 3]);
 
 impl Xyz {
+    /// XYZ from its three components.
     pub fn new(x: f64, y: f64, z: f64) -> Self {
         Xyz([x, y, z])
     }
+    /// The X component.
     pub fn x(&self) -> f64 {
         self.0[0]
     }
+    /// The Y component (luminance; 100 for the reference white).
     pub fn y(&self) -> f64 {
         self.0[1]
     }
+    /// The Z component.
     pub fn z(&self) -> f64 {
         self.0[2]
     }
@@ -186,8 +196,11 @@ impl Xyz {
 /// An RGB colour space: primaries and white point in CIE 1931 xy.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RgbSpace {
+    /// Short name, as the CLI takes it (`srgb`, `srgb-paper`, ...).
     pub name: &'static str,
+    /// Red, green and blue primaries in CIE 1931 xy.
     pub primaries: [[f64; 2]; 3],
+    /// White point (RGB 1, 1, 1) in CIE 1931 xy.
     pub white: [f64; 2],
     /// A published XYZ -> RGB matrix that replaces the one derived from the primaries (the
     /// paper's rounded Eq. 12).
@@ -216,9 +229,13 @@ const SAME_CHROMATICITY: f64 = 5e-5;
 /// attribute holds them.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Chromaticities {
+    /// Red primary in CIE 1931 xy.
     pub red: [f64; 2],
+    /// Green primary in CIE 1931 xy.
     pub green: [f64; 2],
+    /// Blue primary in CIE 1931 xy.
     pub blue: [f64; 2],
+    /// White point in CIE 1931 xy.
     pub white: [f64; 2],
 }
 
@@ -363,6 +380,7 @@ impl RgbSpace {
         white_name(self.white)
     }
 
+    /// Every built-in space.
     pub const ALL: [RgbSpace; 5] = [
         RgbSpace::SRGB,
         RgbSpace::SRGB_PAPER,

@@ -55,7 +55,9 @@ impl fmt::Display for Kind {
 /// Where a table came from.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Origin {
+    /// A built-in table, of this kind.
     Builtin(Kind),
+    /// A user's CSV file, at this path.
     File(PathBuf),
 }
 
@@ -72,26 +74,33 @@ pub struct Table {
 /// A resolved spectrum with a label for messages and plots (`colorchecker:red`, `D65`, a path).
 #[derive(Debug, Clone)]
 pub struct NamedSpectrum {
+    /// How the spectrum was named (`colorchecker:red`, `D65`, a path).
     pub label: String,
+    /// The column's wavelengths and values.
     pub data: Tabulated,
 }
 
 impl Table {
+    /// The table's name: the built-in's canonical name, or the one given to a file.
     pub fn name(&self) -> &str {
         &self.name
     }
+    /// Where the table came from.
     pub fn origin(&self) -> &Origin {
         &self.origin
     }
+    /// What a built-in table holds; None for a user's file.
     pub fn kind(&self) -> Option<Kind> {
         match self.origin {
             Origin::Builtin(k) => Some(k),
             Origin::File(_) => None,
         }
     }
+    /// Column names, in file order (the wavelength column excluded).
     pub fn columns(&self) -> &[String] {
         &self.columns
     }
+    /// The shared wavelengths, nm, strictly increasing.
     pub fn wavelengths_nm(&self) -> &[f64] {
         &self.wavelengths_nm
     }

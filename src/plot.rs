@@ -9,17 +9,24 @@ use std::sync::Once;
 /// One curve: a label, its points and its colour (sRGB 8-bit).
 #[derive(Debug, Clone)]
 pub struct Series {
+    /// Name shown in the legend.
     pub label: String,
+    /// The curve's (x, y) points, in drawing order.
     pub points: Vec<(f64, f64)>,
+    /// Line colour, sRGB 8-bit.
     pub color: [u8; 3],
 }
 
 /// What to draw around the curves.
 #[derive(Debug, Clone)]
 pub struct Figure {
+    /// Title above the plot.
     pub title: String,
+    /// Label of the x axis.
     pub x_label: String,
+    /// Label of the y axis.
     pub y_label: String,
+    /// The curves, drawn in order.
     pub series: Vec<Series>,
 }
 

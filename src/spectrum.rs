@@ -113,12 +113,15 @@ impl WavelengthGrid {
         }
     }
 
+    /// First wavelength, nm.
     pub fn start_nm(&self) -> f64 {
         self.start_nm
     }
+    /// Spacing between samples, nm.
     pub fn step_nm(&self) -> f64 {
         self.step_nm
     }
+    /// Last wavelength, nm.
     pub fn end_nm(&self) -> f64 {
         self.wavelength_nm(self.len - 1)
     }
@@ -237,9 +240,11 @@ impl Tabulated {
         })
     }
 
+    /// Wavelengths, nm, strictly increasing.
     pub fn wavelengths_nm(&self) -> &[f64] {
         &self.wavelengths_nm
     }
+    /// Values, one per wavelength.
     pub fn values(&self) -> &[f64] {
         &self.values
     }
@@ -465,6 +470,7 @@ pub enum Rule {
 }
 
 impl Rule {
+    /// Every rule, lowest order first.
     pub const ALL: [Rule; 3] = [Rule::Riemann, Rule::Trapezoid, Rule::Simpson];
 
     /// Quadrature weights for `len` samples at spacing `h`: the integral is `sum(w_i f_i)`.
@@ -554,9 +560,11 @@ impl Spectrum {
         }
     }
 
+    /// The wavelengths the values are sampled on.
     pub fn grid(&self) -> &WavelengthGrid {
         &self.grid
     }
+    /// Values, one per grid wavelength.
     pub fn values(&self) -> &[f64] {
         &self.values
     }

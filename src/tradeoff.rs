@@ -29,8 +29,11 @@ pub enum Surface {
     Reflectance(Tabulated),
     /// A thin-film stack, unpolarised light at an incidence angle.
     Film {
+        /// The layers between ambient and substrate.
         stack: Stack,
+        /// The angle of incidence in the ambient medium.
         incidence: Incidence,
+        /// Which layers are treated coherently.
         coherence: Coherence,
     },
     /// Everything the light passes through, multiplied: a basis reflectance of the map, a
@@ -110,8 +113,11 @@ fn uniform_grid(wavelengths_nm: &[f64]) -> Option<WavelengthGrid> {
 /// A light and what it falls on.
 #[derive(Debug, Clone)]
 pub struct Stimulus {
+    /// Name for reports.
     pub name: String,
+    /// The light's SPD, at its own wavelengths.
     pub light: Tabulated,
+    /// What the light falls on.
     pub surface: Surface,
     /// How bright it appears, in units of its light's perfect white (1: as bright as a white
     /// surface under the light). Colour errors grow with brightness, so a quadrature's estimate
@@ -286,11 +292,16 @@ impl Reference {
 /// Error and time of one grid and rule on a set of stimuli.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct Measurement {
+    /// Grid step, nm.
     pub step_nm: f64,
+    /// Number of wavelengths on the grid.
     pub samples: usize,
+    /// The integration rule, in words.
     pub rule: String,
+    /// Mean CIEDE2000 against the reference over the stimuli.
     #[serde(rename = "mean_dE2000")]
     pub mean_de2000: f64,
+    /// Largest CIEDE2000 against the reference over the stimuli.
     #[serde(rename = "max_dE2000")]
     pub max_de2000: f64,
     /// The stimulus with the largest error.
@@ -345,18 +356,24 @@ pub fn measure(
 pub struct GridChoice {
     /// The chosen grid, `start:end:step`.
     pub grid: String,
+    /// The chosen step, nm.
     pub step_nm: f64,
+    /// The integration rule, in words.
     pub rule: String,
+    /// The largest CIEDE2000 allowed.
     pub tolerance_de2000: f64,
     /// The largest error over the scene's stimuli on the chosen grid (the estimate).
     #[serde(rename = "max_dE2000")]
     pub max_de2000: f64,
+    /// Name of the stimulus with the largest error on the chosen grid.
     pub worst: String,
     /// Whether some step met the tolerance (else the finest tried is chosen).
     pub met: bool,
     /// Every step tried, coarsest first, with its largest error.
     pub tried: Vec<(f64, f64)>,
+    /// Number of stimuli in the scene.
     pub stimuli: usize,
+    /// The chosen grid itself (not serialised).
     #[serde(skip)]
     pub chosen: WavelengthGrid,
 }
