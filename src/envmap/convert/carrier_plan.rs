@@ -9,7 +9,7 @@ use crate::envmap::convert::pixel_spectra::{
     daylight_coloured, daylight_residual, WhitePremise, DAYLIGHT_RESIDUAL,
 };
 use crate::envmap::convert::pixels::PixelPlan;
-use crate::envmap::convert::plan::Planning;
+use crate::envmap::convert::planning::Planning;
 use crate::envmap::scene::{LightKind, Scene, REFLECTOR};
 use crate::error::Result;
 use crate::spectrum::{Interpolation, Spectrum, Tabulated};

@@ -2,12 +2,13 @@
 //! intermediate), its precision and EV scale, compression and header attributes, and where.
 
 use crate::envmap::convert::analyse::Analysis;
+use crate::envmap::convert::options::mode_name;
 use crate::envmap::convert::options::{ConvertOptions, OutputFormat};
 use crate::envmap::convert::pixel_spectra::WhitePremise;
 use crate::envmap::convert::pixels::{PixelPlan, Pixels};
-use crate::envmap::convert::plan::SpectraPlan;
+use crate::envmap::convert::planning::SpectraPlan;
 use crate::envmap::convert::read::Input;
-use crate::envmap::convert::report::{mode_name, SunReport};
+use crate::envmap::convert::sun_report::SunReport;
 use crate::envmap::files::{AttrValue, Compression, Precision, HALF_MAX};
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};

@@ -35,15 +35,18 @@ pub mod own_basis;
 pub mod pixel_spectra;
 pub mod pixels;
 pub mod plan;
+pub mod planning;
 pub mod read;
 pub mod report;
+pub mod sun_report;
 pub mod write;
 
 pub use options::{
-    input_files, ConvertOptions, LightSpec, Lights, Method, OutputFormat, SkySpd, SunSpd,
-    WhiteSpec, MAX_BANDS, MAX_INPUT,
+    input_files, mode_name, ConvertOptions, LightSpec, Lights, Method, OutputFormat, SkySpd,
+    SunSpd, WhiteSpec, MAX_BANDS, MAX_INPUT,
 };
-pub use report::{mode_name, ConvertReport, Inspection, SunFound, SunReport};
+pub use report::{ConvertReport, Inspection};
+pub use sun_report::{SunFound, SunReport};
 
 use crate::data;
 use crate::error::{Error, Result};

@@ -243,3 +243,11 @@ pub const MAX_INPUT: f64 = 1e18;
 /// The most wavelength bands a spectral output holds (0.1 nm over 400 nm): each is a channel of
 /// every pixel, and the rows of a batch are held in memory.
 pub const MAX_BANDS: usize = 4001;
+
+/// The one name of how pixels became spectra: `faithful`, or the paper's modes.
+pub fn mode_name(method: Method, mode: Mode) -> String {
+    match method {
+        Method::Faithful => "faithful".into(),
+        Method::Basis => format!("{mode:?}").to_lowercase(),
+    }
+}

@@ -3,7 +3,6 @@
 //! become spectra ([`PixelPlan`]), what the white premise does to out-of-gamut colours, and the
 //! file ([`FilePlan`]).
 
-use crate::colorimetry::RgbSpace;
 use crate::data;
 use crate::envmap::convert::analyse::{light_rgb, Analysis};
 use crate::envmap::convert::carrier_plan::carrier_plan;
@@ -14,6 +13,7 @@ use crate::envmap::convert::options::{
 };
 use crate::envmap::convert::pixel_spectra::{Engine, Model, SunSource, WhitePremise};
 use crate::envmap::convert::pixels::PixelPlan;
+use crate::envmap::convert::planning::{Planning, SpectraPlan, SunTable};
 use crate::envmap::convert::read::Input;
 use crate::envmap::scene::{LightKind, Scene, REFLECTOR};
 use crate::error::Result;
@@ -57,30 +57,6 @@ pub struct Plan {
     /// reading it found.
     #[serde(skip)]
     pub input: Input,
-}
-
-/// The spectra's part of the plan: everything but the file.
-pub(crate) struct SpectraPlan {
-    pub method: Method,
-    pub sky: SkySpd,
-    pub sun_spd: Option<String>,
-    pub grid: WavelengthGrid,
-    pub grid_choice: Option<GridChoice>,
-    pub fit: Fit,
-    pub pixels: PixelPlan,
-    pub carriers: Vec<String>,
-    pub mixes: usize,
-}
-
-/// What the spectra's planning stages share: the analysis, the options, the input's RGB space,
-/// and what is settled first (the sun's SPD, the grid, the sky's spectra).
-pub(crate) struct Planning<'a> {
-    pub analysis: &'a Analysis,
-    pub opts: &'a ConvertOptions,
-    pub space: RgbSpace,
-    pub sun: Option<SunTable>,
-    pub grid: WavelengthGrid,
-    pub sky: SkySpd,
 }
 
 /// Plans the write of `input` as analysed, to `output` (None: nothing will be written). The plan
@@ -194,9 +170,6 @@ fn basis_plan(
     };
     Ok((pixels, vec![fit.light.clone()], 0))
 }
-
-/// The sun's SPD (label, table, and how the engine makes it), if the scene has a sun.
-pub(crate) type SunTable = (String, Tabulated, SunSpec);
 
 fn sun_table(scene: &Scene, choice: &SunSpd, analysis: &Analysis) -> Result<Option<SunTable>> {
     let Some(s) = scene.sun() else {
