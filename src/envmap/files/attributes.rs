@@ -2,7 +2,6 @@
 //! `envmap` and `chromaticities` attributes, and names and texts OpenEXR can store.
 
 use crate::colorimetry::Chromaticities;
-use crate::envmap::files::layout::EnvmapAttr;
 use crate::error::{Error, Result};
 use exr::math::Vec2;
 use exr::meta::attribute::{AttributeValue, Text};
@@ -72,16 +71,6 @@ pub fn attr_from_exr(v: &AttributeValue) -> Option<AttrValue> {
         ),
         _ => return None,
     })
-}
-
-/// The `envmap` attribute of a header's own attributes.
-pub(crate) fn envmap_of(header: &Header) -> Option<EnvmapAttr> {
-    envmap_attr(&header.own_attributes)
-}
-
-/// A layer's `envmap` attribute (the exr crate reads it into its own field, not `other`).
-pub fn envmap_attr(attrs: &exr::meta::header::LayerAttributes) -> Option<EnvmapAttr> {
-    attrs.environment_map.map(EnvmapAttr::from_exr)
 }
 
 /// The header's `chromaticities` attribute (shared by all parts of a file).

@@ -166,6 +166,16 @@ pub fn parse_spectral_channel_name(name: &str) -> Option<f64> {
     num.replace(',', ".").parse::<f64>().ok()
 }
 
+/// The `envmap` attribute of a header's own attributes.
+pub(crate) fn envmap_of(header: &exr::meta::header::Header) -> Option<EnvmapAttr> {
+    envmap_attr(&header.own_attributes)
+}
+
+/// A layer's `envmap` attribute (the exr crate reads it into its own field, not `other`).
+pub fn envmap_attr(attrs: &exr::meta::header::LayerAttributes) -> Option<EnvmapAttr> {
+    attrs.environment_map.map(EnvmapAttr::from_exr)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -23,11 +23,11 @@ pub mod spectral_writer;
 mod write_header;
 pub mod zip;
 
-pub use attributes::{attr_from_exr, envmap_attr, AttrValue};
+pub use attributes::{attr_from_exr, AttrValue};
 pub use faces::{read_face_files, read_faces, FACE_NAMES, FACE_SIGNED};
 pub use layout::{
-    parse_spectral_channel_name, spectral_channel_name, ChannelSet, Compression, EnvmapAttr,
-    Precision, SpectralLayout, HALF_MAX, ZIP_DEFAULT_LEVEL, ZIP_MAX_LEVEL,
+    envmap_attr, parse_spectral_channel_name, spectral_channel_name, ChannelSet, Compression,
+    EnvmapAttr, Precision, SpectralLayout, HALF_MAX, ZIP_DEFAULT_LEVEL, ZIP_MAX_LEVEL,
 };
 pub use rgb::{read_rgb, InputImage};
 pub use spectral_reader::{

@@ -2,12 +2,13 @@
 //! layer's, or a grey `Y`) and Radiance HDR, chosen by the file's magic bytes.
 
 use crate::colorimetry::Chromaticities;
-use crate::envmap::files::attributes::{chromaticities_of, envmap_of};
+use crate::envmap::files::attributes::chromaticities_of;
 use crate::envmap::files::decode::{
     channel_names, compression_name, line_to_f32, open_exr, part_blocks, sample_type_name, sniff,
     FileKind,
 };
 use crate::envmap::files::errors::{exr_err, io_err, parse_err, unsupported_err};
+use crate::envmap::files::layout::envmap_of;
 use crate::envmap::files::layout::EnvmapAttr;
 use crate::envmap::RgbImage;
 use crate::error::Result;

@@ -3,11 +3,12 @@
 //! channel as stored ([`read_stored_channel`]).
 
 use crate::colorimetry::Chromaticities;
-use crate::envmap::files::attributes::{attr_from_exr, chromaticities_of, envmap_of, AttrValue};
+use crate::envmap::files::attributes::{attr_from_exr, chromaticities_of, AttrValue};
 use crate::envmap::files::decode::{
     channel_names, line_to_f32, open_exr, part_blocks, sniff, ExrReader, FileKind,
 };
 use crate::envmap::files::errors::{exr_err, parse_err};
+use crate::envmap::files::layout::envmap_of;
 use crate::envmap::files::layout::{parse_spectral_channel_name, EnvmapAttr};
 use crate::error::Result;
 use exr::block::UncompressedBlock;
