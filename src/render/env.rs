@@ -37,7 +37,9 @@ pub const SPECULAR_ROWS: usize = 32;
 /// shininess.
 #[derive(Debug, Clone)]
 pub struct Filtered {
+    /// The environment itself, seen where rays miss and behind transparent objects.
     pub background: CoeffMap,
+    /// Cosine-weighted mean radiance per normal direction: irradiance over pi, `D(N)`.
     pub diffuse: CoeffMap,
     /// `(shininess, map)` in the order asked for.
     pub specular: Vec<(f64, CoeffMap)>,

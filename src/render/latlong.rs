@@ -18,9 +18,13 @@ pub const BACKGROUND_ROWS: usize = 256;
 /// `texels[(y w + x) groups + g]`, coefficients `4 g .. 4 g + 3`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CoeffMap {
+    /// Texels per row (longitude).
     pub width: usize,
+    /// Rows (latitude), the first looking up (+Y).
     pub height: usize,
+    /// Groups of four coefficients per texel.
     pub groups: usize,
+    /// `width * height * groups` groups, row-major, a texel's groups together.
     pub texels: Vec<[f32; 4]>,
 }
 

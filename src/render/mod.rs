@@ -103,26 +103,36 @@ pub const MAX_LAYERS: usize = 8;
 /// the centre to the top edge (the width follows the image's aspect ratio).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct View {
+    /// Centre of the window, world (x, y).
     pub center: [f64; 2],
+    /// World units from the centre to the top edge.
     pub half_height: f64,
 }
 
 /// A shape, all seen by an orthographic camera looking down −Z.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Shape {
+    /// A sphere.
     Sphere {
+        /// Centre, world (x, y, z).
         center: [f64; 3],
+        /// Radius in world units.
         radius: f64,
     },
     /// A cylinder with its axis along X, from `center.x - half_length` to `center.x + half_length`.
     CylinderX {
+        /// Centre of the axis, world (x, y, z).
         center: [f64; 3],
+        /// Radius in world units.
         radius: f64,
+        /// Half the length along X, in world units.
         half_length: f64,
     },
     /// A rectangle facing +Z.
     Quad {
+        /// Centre, world (x, y, z).
         center: [f64; 3],
+        /// Half the width (X) and half the height (Y), in world units.
         half_size: [f64; 2],
     },
 }
@@ -131,13 +141,19 @@ pub enum Shape {
 /// `x1` (held beyond), multiplying every layer's thickness (the paper's Fig. 8).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Ramp {
+    /// World x where the scale is `s0`.
     pub x0: f64,
+    /// World x where the scale is `s1`.
     pub x1: f64,
+    /// Thickness factor at `x0` and on its side beyond it.
     pub s0: f64,
+    /// Thickness factor at `x1` and on its side beyond it.
     pub s1: f64,
 }
 
 impl Ramp {
+    /// The thickness factor at world `x`: linear from `s0` at `x0` to `s1` at `x1`, clamped
+    /// (`s0` where `x0 == x1`).
     pub fn scale(&self, x: f64) -> f64 {
         let t = if self.x1 == self.x0 {
             0.0
@@ -151,22 +167,28 @@ impl Ramp {
 /// A multilayer film: ambient, layers from the ambient side, substrate (see [`crate::thinfilm`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Film {
+    /// The incident medium, on the viewer's side; must be transparent (air in the presets).
     pub ambient: Optical,
+    /// The layers, from the ambient side, at most [`MAX_LAYERS`].
     pub layers: Vec<Layer>,
+    /// The medium under the last layer.
     pub substrate: Optical,
 }
 
 /// A surface's optical description.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Surface {
+    /// Name of the surface in messages and reports.
     pub label: String,
     /// `R_d(lambda)` of the pigment; None is black.
     pub diffuse: Option<Tabulated>,
+    /// Diffuse coefficient `k_d` (0..=100; 1 reflects all light).
     pub kd: f64,
     /// Specular coefficient without a film (a film's reflectance replaces it).
     pub ks: f64,
     /// Phong exponent `n`.
     pub shininess: f64,
+    /// The thin film on the surface; None: a plain Phong surface.
     pub film: Option<Film>,
     /// Eq. 9: light from behind is transmitted through the film (requires a film).
     pub transparent: bool,
@@ -175,9 +197,13 @@ pub struct Surface {
 /// One object: a shape, its surface, and which [`Lighting`] of the scene lights it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Object {
+    /// Its geometry.
     pub shape: Shape,
+    /// Its optical description.
     pub surface: Surface,
+    /// Index into [`Scene::lightings`] of the lighting that lights it.
     pub lighting: usize,
+    /// The film's thickness ramp over world x; None: the film as given everywhere.
     pub ramp: Option<Ramp>,
     /// Whether the surface flags of `specmap render` (--film, --diffuse, --kd...) apply to it.
     pub main: bool,
@@ -187,12 +213,18 @@ pub struct Object {
 #[derive(Debug, Clone)]
 pub enum Environment {
     /// The same radiance in every direction: `radiance * E(lambda)`.
-    Uniform { radiance: f64 },
+    Uniform {
+        /// Radiance in units of the lighting's `E` spectrum.
+        radiance: f64,
+    },
     /// `sky * E` above the horizon, `ground * E` below, blended over `blend_deg` degrees of
     /// elevation around it.
     SkyGround {
+        /// Radiance above the horizon, in units of `E`.
         sky: f64,
+        /// Radiance below the horizon, in units of `E`.
         ground: f64,
+        /// Width of the blend around the horizon, in degrees of elevation.
         blend_deg: f64,
     },
     /// A map in coefficient space: per texel one coefficient per spectrum of the lighting
@@ -204,7 +236,9 @@ pub enum Environment {
 /// units of the lighting's `E` spectrum.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sun {
+    /// Unit vector towards the light, in the objects' frame (the camera's: see [`Scene::orbit`]).
     pub direction: [f64; 3],
+    /// Irradiance at normal incidence, in units of the sun's SPD at Y = 1 (`E` or `sun_spd`).
     pub irradiance: f64,
 }
 
@@ -220,6 +254,7 @@ pub enum LightSpectra {
         light: Tabulated,
         /// The basis reflectances (the paper's ColorChecker red, green, blue).
         basis_reflectance: [Tabulated; 3],
+        /// `E`: the SPD of the fourth coefficient and of the sun.
         e_spd: Tabulated,
         /// Label of `e_spd`.
         e_label: String,
@@ -228,8 +263,11 @@ pub enum LightSpectra {
     /// `spectra[j]`, unnormalised), and the sun's SPD at luminance Y = 1 on the file's
     /// wavelengths (the sun's irradiance is in its units).
     Own {
+        /// The K spectra, in the map's radiance units; coefficient `j` multiplies `spectra[j]`.
         spectra: Vec<Tabulated>,
+        /// The sun's SPD, at luminance Y = 1 on the file's wavelengths.
         sun_spd: Tabulated,
+        /// Label of `sun_spd` ("none" where the file has no sun).
         sun_label: String,
     },
 }
@@ -238,9 +276,13 @@ pub enum LightSpectra {
 /// the sun.
 #[derive(Debug, Clone)]
 pub struct Lighting {
+    /// Label of the main light (for a map, the light it was converted with).
     pub label: String,
+    /// The spectra the coefficients expand with.
     pub spectra: LightSpectra,
+    /// The radiance from every direction, in coefficient space.
     pub environment: Environment,
+    /// The directional light; None: no sun.
     pub sun: Option<Sun>,
 }
 
@@ -289,11 +331,17 @@ pub fn basis_reflectances() -> Result<[Tabulated; 3]> {
 /// A whole scene: image size, view, lightings, objects and the lighting of the background.
 #[derive(Debug, Clone)]
 pub struct Scene {
+    /// Name of the scene (a preset's [`Preset::name`]).
     pub name: String,
+    /// Image width in pixels (at most 16384).
     pub width: usize,
+    /// Image height in pixels (at most 16384).
     pub height: usize,
+    /// The camera's orthographic window.
     pub view: View,
+    /// The lightings, indexed by [`Object::lighting`] and [`Scene::background`]; at least one.
     pub lightings: Vec<Lighting>,
+    /// The objects; a ray sees the nearest it hits.
     pub objects: Vec<Object>,
     /// The lighting whose environment is seen where rays miss.
     pub background: usize,
@@ -317,7 +365,9 @@ pub const IDENTITY: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0
 /// `(-sin yaw cos pitch, sin pitch, -cos yaw cos pitch)` in the world (down −Z at 0, 0).
 #[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
 pub struct Orbit {
+    /// Rotation about the world's vertical (Y), in degrees.
     pub yaw_deg: f64,
+    /// Rotation about the camera's horizontal (X), in degrees; positive looks up.
     pub pitch_deg: f64,
 }
 
@@ -351,7 +401,10 @@ pub enum Backdrop {
     /// The background lighting's environment through a pinhole at the image centre looking
     /// down −Z with this vertical field of view (the objects stay orthographic): a map shows
     /// as a photograph would.
-    Environment { fov_deg: f64 },
+    Environment {
+        /// Vertical field of view of the pinhole, in degrees.
+        fov_deg: f64,
+    },
     /// The environment straight down −Z: one colour.
     Flat,
     /// Black.
@@ -366,9 +419,13 @@ impl Backdrop {
 /// How spectra become colours: grid, integration rule, observer, output RGB space.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Spectral {
+    /// The wavelengths the render samples, in nm.
     pub grid: WavelengthGrid,
+    /// The integration rule over `grid`.
     pub rule: Rule,
+    /// The colour-matching functions.
     pub observer: Observer,
+    /// The output linear RGB space.
     pub space: RgbSpace,
 }
 
@@ -410,7 +467,9 @@ impl Default for Spectral {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Backend {
+    /// [`cpu::render`], in f64 on the CPU.
     Cpu,
+    /// [`gpu::Gpu::render`], in f32 on the GPU.
     Gpu,
 }
 

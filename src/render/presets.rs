@@ -24,6 +24,7 @@ pub enum Preset {
 }
 
 impl Preset {
+    /// Every preset: the figures in order, then [`Preset::CheckerSpheres`].
     pub const ALL: [Preset; 5] = [
         Preset::Ball,
         Preset::TransparentBall,
@@ -32,6 +33,7 @@ impl Preset {
         Preset::CheckerSpheres,
     ];
 
+    /// Its name as `--scene` and file names spell it (`transparent-ball`).
     pub fn name(self) -> &'static str {
         match self {
             Preset::Ball => "ball",
