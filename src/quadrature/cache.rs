@@ -50,6 +50,7 @@ impl Key {
         Key(h.finalize().to_hex().to_string())
     }
 
+    /// The key as lower-case hex (blake3).
     pub fn as_str(&self) -> &str {
         &self.0
     }
@@ -58,13 +59,17 @@ impl Key {
 /// One cached choice.
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct Entry {
+    /// The entry's layout version ([`FORMAT`]).
     pub format: u32,
+    /// The specmap version that wrote the entry ([`VERSION`]).
     pub specmap: String,
+    /// The key the entry is stored under, as hex.
     pub key: String,
     /// The fit ran to its end (its time budget did not cut it short).
     pub complete: bool,
     /// The time budget it ran under, in seconds (None: none).
     pub budget_s: Option<f64>,
+    /// What was chosen.
     pub selection: Selection,
 }
 
@@ -107,6 +112,7 @@ impl Cache {
         Cache { dir: dir.into() }
     }
 
+    /// The folder the entries are in.
     pub fn dir(&self) -> &Path {
         &self.dir
     }

@@ -23,9 +23,13 @@ pub enum Family {
 /// One uniform grid and rule tried.
 #[derive(Debug, Clone, Copy, serde::Serialize, serde::Deserialize)]
 pub struct UniformTried {
+    /// Grid step, nm.
     pub step_nm: f64,
+    /// Number of wavelengths on the grid.
     pub samples: usize,
+    /// The step's best rule.
     pub rule: Rule,
+    /// Largest CIEDE2000 over the fit and held-out stimuli with that rule.
     #[serde(rename = "max_dE2000")]
     #[serde(deserialize_with = "crate::quadrature::cache::error_or_infinite")]
     pub max: f64,
@@ -34,12 +38,18 @@ pub struct UniformTried {
 /// The cheapest uniform grid that meets the target.
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct UniformChoice {
+    /// The chosen grid and rule as a quadrature.
     pub quadrature: Quadrature,
+    /// The chosen grid, `start:end:step`.
     pub grid: String,
+    /// The chosen grid's best rule.
     pub rule: Rule,
+    /// Number of wavelengths on the chosen grid.
     pub samples: usize,
+    /// The chosen grid's largest CIEDE2000 over the fit and held-out stimuli.
     #[serde(deserialize_with = "crate::quadrature::cache::error_or_infinite")]
     pub estimate_de2000: f64,
+    /// Whether the chosen grid met the target (else it is the finest tried).
     pub met: bool,
     /// The best rule of every step tried, coarsest first.
     pub tried: Vec<UniformTried>,
@@ -48,21 +58,32 @@ pub struct UniformChoice {
 /// The stimuli of a scene and how to judge them.
 #[derive(Debug, Clone)]
 pub struct Scene<'a> {
+    /// The stimuli quadratures are fitted on.
     pub fit: &'a [Stimulus],
+    /// The stimuli held back to check the fit (may be empty).
     pub held_out: &'a [Stimulus],
+    /// The observer colours are computed for.
     pub observer: Observer,
+    /// Start of the range the stimuli are sampled over, nm.
     pub start_nm: f64,
+    /// End of the range the stimuli are sampled over, nm.
     pub end_nm: f64,
+    /// The CIELAB white the errors are taken against.
     pub white: White,
 }
 
 /// What `--tolerance` chose.
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct Selection {
+    /// The quadrature chosen.
     pub quadrature: Quadrature,
+    /// Where the chosen quadrature came from.
     pub kind: Kind,
+    /// The family it was chosen among.
     pub family: Family,
+    /// The CIEDE2000 every stimulus must stay within.
     pub tolerance_de2000: f64,
+    /// `margin * tolerance`, what the estimate had to meet.
     pub target_de2000: f64,
     /// The most nodes the caller allows ([`Options::budget`]).
     #[serde(rename = "max_nodes")]
@@ -70,17 +91,20 @@ pub struct Selection {
     /// The chosen quadrature's largest error over the fit and held-out stimuli.
     #[serde(deserialize_with = "crate::quadrature::cache::error_or_infinite")]
     pub estimate_de2000: f64,
+    /// Whether the estimate met the target.
     pub met: bool,
     /// Why this one.
     pub reason: String,
     /// The scene fit (with `--quadrature scene`).
     pub scene: Option<fit::Choice>,
+    /// The cheapest uniform grid that meets the target (computed with either family).
     pub uniform: UniformChoice,
     /// The quadrature against the 1 nm render on the image's own pixels, where the caller
     /// renders one and checked it (`render --tolerance` with a scene quadrature).
     pub image: Option<ImageCheck>,
     /// Seconds the choice took, and where they went (a scene's choice fills them).
     pub seconds: f64,
+    /// Per stage, the seconds it took.
     pub stages: Vec<super::progress::StageTime>,
     /// The cache entry it was read from ([`super::cache`]); None for a choice made now.
     #[serde(default)]
@@ -91,13 +115,17 @@ pub struct Selection {
 /// its pixels (every `stride`-th row and column, each block's centre).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ImageCheck {
+    /// Largest CIEDE2000 over the pixels checked.
     #[serde(deserialize_with = "crate::quadrature::cache::error_or_infinite")]
     pub max_de2000: f64,
+    /// Mean CIEDE2000 over the pixels checked.
     #[serde(deserialize_with = "crate::quadrature::cache::error_or_infinite")]
     pub mean_de2000: f64,
     /// The pixel (x, y) of the largest.
     pub max_at: [usize; 2],
+    /// Number of pixels checked.
     pub pixels: usize,
+    /// Every `stride`-th row and column is checked (1: every pixel).
     pub stride: usize,
 }
 

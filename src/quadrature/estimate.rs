@@ -102,6 +102,7 @@ impl Estimator {
         Ok(out)
     }
 
+    /// Number of stimuli (never zero).
     pub fn len(&self) -> usize {
         self.stimuli.len()
     }
@@ -109,9 +110,11 @@ impl Estimator {
     pub fn is_empty(&self) -> bool {
         false
     }
+    /// The stimuli, in the order given.
     pub fn stimuli(&self) -> &[Stimulus] {
         &self.stimuli
     }
+    /// The observer colours are computed for.
     pub fn observer(&self) -> Observer {
         self.observer
     }

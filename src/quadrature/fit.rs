@@ -92,6 +92,7 @@ impl Options {
             ..Options::new(tolerance)?
         })
     }
+    /// The CIEDE2000 the estimate must meet: `margin * tolerance`.
     pub fn target(&self) -> f64 {
         self.margin * self.tolerance
     }
@@ -129,10 +130,13 @@ pub fn check_tolerance(tolerance: f64) -> Result<()> {
 /// One node count tried.
 #[derive(Debug, Clone, Copy, serde::Serialize, serde::Deserialize)]
 pub struct Tried {
+    /// Number of nodes.
     pub nodes: usize,
+    /// Largest CIEDE2000 over the fit set.
     #[serde(rename = "fit_max_dE2000")]
     #[serde(deserialize_with = "crate::quadrature::cache::error_or_infinite")]
     pub fit_max: f64,
+    /// Largest CIEDE2000 over the held-out set (0 with none).
     #[serde(rename = "held_out_max_dE2000")]
     #[serde(deserialize_with = "crate::quadrature::cache::error_or_infinite")]
     pub held_out_max: f64,
@@ -141,24 +145,30 @@ pub struct Tried {
 /// What the fit chose, and why.
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct Choice {
+    /// The quadrature chosen.
     pub quadrature: Quadrature,
+    /// The CIEDE2000 every stimulus must stay within.
     pub tolerance_de2000: f64,
     /// `margin * tolerance`, what the estimate had to meet.
     pub target_de2000: f64,
     /// The largest error over the fit set and the held-out set: the estimate.
     #[serde(deserialize_with = "crate::quadrature::cache::error_or_infinite")]
     pub estimate_de2000: f64,
+    /// Largest CIEDE2000 over the fit set.
     #[serde(rename = "fit_max_dE2000")]
     #[serde(deserialize_with = "crate::quadrature::cache::error_or_infinite")]
     pub fit_max: f64,
+    /// Largest CIEDE2000 over the held-out set (0 with none).
     #[serde(rename = "held_out_max_dE2000")]
     #[serde(deserialize_with = "crate::quadrature::cache::error_or_infinite")]
     pub held_out_max: f64,
+    /// Mean CIEDE2000 over the held-out set (0 with none).
     #[serde(rename = "held_out_mean_dE2000")]
     #[serde(deserialize_with = "crate::quadrature::cache::error_or_infinite")]
     pub held_out_mean: f64,
     /// The stimulus with the largest error.
     pub worst: String,
+    /// Whether the estimate met the target.
     pub met: bool,
     /// The deadline stopped the search before it was done ([`Options::deadline`]).
     pub cut_short: bool,
@@ -168,6 +178,7 @@ pub struct Choice {
     pub tried: Vec<Tried>,
     /// Stimuli fitted and held out.
     pub stimuli: usize,
+    /// Stimuli held out (0 with none).
     pub held_out: usize,
 }
 

@@ -166,15 +166,19 @@ impl Quadrature {
         meyer::meyer(observer)
     }
 
+    /// Where the quadrature came from.
     pub fn kind(&self) -> Kind {
         self.kind
     }
+    /// The observer whose colour-matching functions the weights integrate.
     pub fn observer(&self) -> Observer {
         self.observer
     }
+    /// The nodes in nm, strictly increasing.
     pub fn nodes_nm(&self) -> &[f64] {
         &self.nodes_nm
     }
+    /// Per node: the x, y, z weights (CMF units times nm).
     pub fn weights(&self) -> &[[f64; 3]] {
         &self.weights
     }
@@ -259,12 +263,17 @@ impl fmt::Display for Quadrature {
 /// A quadrature as it is stored.
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct Record {
+    /// Where the quadrature came from.
     pub kind: Kind,
+    /// The observer the weights are for.
     pub observer: Observer,
+    /// The nodes in nm, strictly increasing.
     pub nodes_nm: Vec<f64>,
+    /// Per node: the x, y, z weights (CMF units times nm).
     pub weights: Vec<[f64; 3]>,
     /// The grid and rule of a uniform quadrature.
     pub grid: Option<String>,
+    /// The integration rule of a uniform quadrature.
     pub rule: Option<Rule>,
 }
 
@@ -305,13 +314,17 @@ impl TryFrom<Record> for Quadrature {
 /// A quadrature as `--json` reports it.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct Summary {
+    /// Where the quadrature came from.
     pub kind: Kind,
+    /// Number of nodes.
     pub nodes: usize,
+    /// The nodes in nm, strictly increasing.
     pub nodes_nm: Vec<f64>,
     /// Per node: the x, y, z weights (`XYZ = sum_i w_i S(lambda_i)`, CMF units times nm).
     pub weights: Vec<[f64; 3]>,
     /// The grid and rule of a uniform quadrature.
     pub grid: Option<String>,
+    /// The integration rule of a uniform quadrature.
     pub rule: Option<Rule>,
     /// The largest CIEDE2000 over the stimuli it was checked on, when it was.
     pub estimate_de2000: Option<f64>,

@@ -10,41 +10,76 @@ use std::time::Instant;
 #[derive(Debug, Clone, PartialEq)]
 pub enum Stage {
     /// The scene's spectra (its stimuli) are being gathered, for round `round`.
-    Stimuli { round: usize },
+    Stimuli {
+        /// The round, counting the first as 0.
+        round: usize,
+    },
     /// The uniform grids are being judged on `stimuli` stimuli.
-    UniformGrids { stimuli: usize },
+    UniformGrids {
+        /// Number of stimuli.
+        stimuli: usize,
+    },
     /// The greedy stage has `nodes` nodes, whose largest error is `max`.
-    Greedy { nodes: usize, max: f64 },
+    Greedy {
+        /// Number of nodes so far.
+        nodes: usize,
+        /// Their largest CIEDE2000 over the stimuli.
+        max: f64,
+    },
     /// Pruning, at `nodes` nodes whose largest error is `max`.
-    Pruning { nodes: usize, max: f64 },
+    Pruning {
+        /// Number of nodes left.
+        nodes: usize,
+        /// Their largest CIEDE2000 over the stimuli.
+        max: f64,
+    },
     /// Reseeding with `nodes` nodes (one fewer than the fit kept, or a budget's count): seed
     /// `seed` of `of` is being searched by `search` ("exchange" or "descent"); `kept` is the
     /// node count and largest error of the best set kept so far, if any.
     Reseeding {
+        /// Number of nodes searched for.
         nodes: usize,
+        /// The seed being searched, from 1.
         seed: usize,
+        /// Number of seeds in all.
         of: usize,
+        /// The search: "exchange" or "descent".
         search: &'static str,
+        /// Node count and largest CIEDE2000 of the best set kept so far; None: none yet.
         kept: Option<(usize, f64)>,
     },
     /// The kept nodes' weights are solved once more.
-    Reweighing { nodes: usize },
+    Reweighing {
+        /// Number of nodes kept.
+        nodes: usize,
+    },
     /// Every texel of a spectral map checked: `nodes` nodes err `every` on them against
     /// `fitted` on the fit's own stimuli, so the worst join the fit for round `round`.
     Texels {
+        /// The round, counting the first as 0.
         round: usize,
+        /// Number of nodes.
         nodes: usize,
+        /// Largest CIEDE2000 over the fit's own stimuli.
         fitted: f64,
+        /// Largest CIEDE2000 over every texel.
         every: f64,
     },
     /// The image's `pixels` pixels are being rendered at 1 nm, to check the quadrature on.
-    Image { pixels: usize },
+    Image {
+        /// Number of pixels rendered.
+        pixels: usize,
+    },
     /// `nodes` nodes err `image` on the image, beyond `tolerance`: the fit's margin narrows
     /// for round `round`.
     ImageMiss {
+        /// The round, counting the first as 0.
         round: usize,
+        /// Number of nodes.
         nodes: usize,
+        /// Largest CIEDE2000 on the image.
         image: f64,
+        /// The CIEDE2000 the image had to stay within.
         tolerance: f64,
     },
 }
@@ -132,7 +167,9 @@ pub fn quiet(_: &Stage) {}
 /// Seconds spent in one kind of stage ([`Stage::kind`]).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct StageTime {
+    /// The kind of stage ([`Stage::kind`]).
     pub stage: String,
+    /// Seconds spent in it, added up.
     pub seconds: f64,
 }
 
@@ -150,6 +187,7 @@ impl Default for Timings {
 }
 
 impl Timings {
+    /// No stage open, no time spent.
     pub fn new() -> Timings {
         Timings {
             open: RefCell::new(None),
