@@ -28,9 +28,13 @@ pub struct Gpu {
 /// What the adapter is, for reports.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct AdapterReport {
+    /// The adapter's name as wgpu reports it (e.g. the GPU's model).
     pub name: String,
+    /// The graphics API, lowercase (`vulkan`, `metal`, `dx12`, `gl`).
     pub backend: String,
+    /// wgpu's device type (`DiscreteGpu`, `IntegratedGpu`, `Cpu`, ...).
     pub device_type: String,
+    /// The driver's name and version info, space-separated (may be empty).
     pub driver: String,
 }
 
@@ -131,6 +135,7 @@ impl Gpu {
         })
     }
 
+    /// What the adapter this renderer runs on is.
     pub fn adapter(&self) -> AdapterReport {
         AdapterReport {
             name: self.info.name.clone(),

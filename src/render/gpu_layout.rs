@@ -4,14 +4,18 @@
 
 use bytemuck::{Pod, Zeroable};
 
-/// Object kinds (`GpuObject::kind`).
+/// [`GpuObject::kind`] of a [`super::Shape::Sphere`].
 pub const SPHERE: u32 = 0;
+/// [`GpuObject::kind`] of a [`super::Shape::CylinderX`].
 pub const CYLINDER_X: u32 = 1;
+/// [`GpuObject::kind`] of a [`super::Shape::Quad`].
 pub const QUAD: u32 = 2;
 
-/// Material flags.
+/// [`GpuMaterial::flags`] bit: the surface is transparent (Eq. 9).
 pub const TRANSPARENT: u32 = 1;
+/// [`GpuMaterial::flags`] bit: the surface has a film (its table at `film_offset`).
 pub const HAS_FILM: u32 = 2;
+/// [`GpuMaterial::flags`] bit: the surface has a diffuse spectrum (at `diffuse_offset`).
 pub const HAS_DIFFUSE: u32 = 4;
 
 /// `Params::flags`: rays that miss every object are black, not the environment.
@@ -21,13 +25,19 @@ pub const HIDE_BACKGROUND: u32 = 1;
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
 pub struct Params {
+    /// Image width in pixels.
     pub width: u32,
+    /// Image height in pixels.
     pub height: u32,
+    /// Number of quadrature nodes (wavelengths).
     pub n_wl: u32,
+    /// Number of records in `objects`.
     pub n_objects: u32,
+    /// Index in `lightings` of the lighting seen where rays miss.
     pub background: u32,
     /// Offset in `spectra` of the quadrature's x, y, z weights over `sum w_y` (n_wl each).
     pub cmf_offset: u32,
+    /// Offset in `spectra` of the quadrature's nodes in nm (n_wl).
     pub wl_offset: u32,
     /// [`HIDE_BACKGROUND`].
     pub flags: u32,
@@ -44,8 +54,11 @@ pub struct Params {
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
 pub struct GpuObject {
+    /// [`SPHERE`], [`CYLINDER_X`] or [`QUAD`].
     pub kind: u32,
+    /// Index in `materials` of its surface.
     pub material: u32,
+    /// Index in `lightings` of the lighting that lights it.
     pub lighting: u32,
     /// Index in `maps` of the specular map for this object's shininess and lighting.
     pub spec_map: u32,
@@ -63,7 +76,9 @@ pub struct GpuObject {
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
 pub struct GpuMaterial {
+    /// [`TRANSPARENT`], [`HAS_FILM`], [`HAS_DIFFUSE`] or'ed.
     pub flags: u32,
+    /// Layers of the film (0 without one), at most [`super::MAX_LAYERS`].
     pub n_layers: u32,
     /// Offset of R_d in `spectra`.
     pub diffuse_offset: u32,
@@ -82,8 +97,12 @@ pub struct GpuMaterial {
 pub struct GpuLighting {
     /// Offset of the first spectrum; the other `4 groups - 1` follow, n_wl apart.
     pub spectra: u32,
+    /// Index in `maps` of its diffuse irradiance map (over pi).
     pub diffuse_map: u32,
+    /// Index in `maps` of the environment itself, seen where rays miss and behind transparent
+    /// objects.
     pub background_map: u32,
+    /// 1 where the lighting has a sun, else 0.
     pub has_sun: u32,
     /// Direction to the sun xyz, irradiance.
     pub sun: [f32; 4],

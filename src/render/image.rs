@@ -8,12 +8,16 @@ use std::path::Path;
 /// A linear RGB image, row-major from the top-left pixel.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Image {
+    /// Width in pixels.
     pub width: usize,
+    /// Height in pixels.
     pub height: usize,
+    /// `width * height` linear RGB values, row-major from the top-left pixel.
     pub pixels: Vec<[f32; 3]>,
 }
 
 impl Image {
+    /// The linear RGB of pixel (x, y), y down from the top row.
     pub fn get(&self, x: usize, y: usize) -> [f32; 3] {
         self.pixels[y * self.width + x]
     }
@@ -74,11 +78,13 @@ impl Image {
 /// CIEDE2000 between two renders of the same size.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct Comparison {
+    /// Mean CIEDE2000 over the pixels where both images are finite (0 where none are).
     #[serde(rename = "mean_dE2000")]
     pub mean: f64,
     /// Nearest-rank 99th percentile.
     #[serde(rename = "p99_dE2000")]
     pub p99: f64,
+    /// Largest CIEDE2000 over the same pixels (0 where there are none).
     #[serde(rename = "max_dE2000")]
     pub max: f64,
     /// Pixel (x, y) of the largest difference.

@@ -20,9 +20,11 @@ use crate::tradeoff::sample;
 /// The CPU's own copy of a film: the thin-film module's stack and its per-wavelength films.
 #[derive(Debug, Clone)]
 pub struct CpuFilm {
+    /// The film as the thin-film module's stack of media and layers.
     pub stack: Stack,
     /// Per wavelength: ambient, layers, substrate indices.
     pub indices: Vec<(Index, Vec<Index>, Index)>,
+    /// Nominal thickness of each layer in nm, from the ambient side.
     pub thickness_nm: Vec<f64>,
     /// Per wavelength, at the nominal thicknesses.
     pub films: Vec<Film<f64>>,
@@ -31,16 +33,24 @@ pub struct CpuFilm {
 /// Everything both renderers read.
 #[derive(Debug, Clone)]
 pub struct Prepared {
+    /// The frame constants (the shader's uniform buffer).
     pub params: Params,
+    /// Every spectrum at the nodes, addressed by the records' offsets: weighted CMFs,
+    /// wavelengths, lightings' spectra, diffuse spectra and film tables.
     pub spectra: Vec<f32>,
+    /// One record per object of the scene, in its order.
     pub objects: Vec<GpuObject>,
+    /// One record per object of the scene, in its order ([`GpuObject::material`]).
     pub materials: Vec<GpuMaterial>,
+    /// One record per lighting of the scene, in its order.
     pub lightings: Vec<GpuLighting>,
-    /// [offset in texels, width, height, 0].
+    /// Per map: [offset in `texels`, width, height, groups of four coefficients per texel].
     pub maps: Vec<[u32; 4]>,
+    /// Every map's texels, each map row-major as [`CoeffMap::texels`].
     pub texels: Vec<[f32; 4]>,
     /// Per pixel row and band, the objects it can hit ([`super::candidates`]).
     pub rows: Vec<u32>,
+    /// The quadrature's nodes in nm.
     pub wavelengths_nm: Vec<f64>,
     /// Per material (CPU only).
     pub films: Vec<Option<CpuFilm>>,
