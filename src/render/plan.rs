@@ -66,11 +66,15 @@ pub enum Source {
 /// The plan: what the choice weighed, and what it took.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct Plan {
+    /// Frames the quadrature serves ([`Workload::frames`]).
     pub frames: usize,
+    /// Where the chosen quadrature came from.
     pub source: Source,
+    /// Why it was chosen, in words (the stages' reasons joined by "; ").
     pub reason: String,
     /// The uniform grid's nodes and its predicted time for every frame (not with a cache hit).
     pub uniform_nodes: Option<usize>,
+    /// Predicted seconds of every frame on the uniform grid (None: no frame was measured).
     pub uniform_path_s: Option<f64>,
     /// The time the fit's search was given (None: unlimited, or no fit ran).
     pub fit_budget_s: Option<f64>,
@@ -82,21 +86,29 @@ pub struct Plan {
     pub seconds: f64,
     /// The cache entry read or written, and a note on one that was ignored.
     pub cache_file: Option<PathBuf>,
+    /// Why a cache entry was not used or not stored; None: nothing to note.
     pub cache_note: Option<String>,
 }
 
 /// The chosen quadrature's selection and the plan that chose it.
 pub struct Planned {
+    /// The chosen quadrature, with what it met.
     pub selection: Selection,
+    /// How it was chosen.
     pub plan: Plan,
 }
 
 /// What choosing needs besides the scene.
 pub struct Aim<'a> {
+    /// The colour-matching functions the images are computed with.
     pub observer: Observer,
+    /// The output linear RGB space.
     pub space: RgbSpace,
+    /// The fit's target (tolerance in CIEDE2000, margin, node limits).
     pub opts: Options,
+    /// How long the fit may search.
     pub budget: FitBudget,
+    /// Where choices are stored and looked up; None: no cache.
     pub cache: Option<&'a Cache>,
 }
 

@@ -60,7 +60,9 @@ const HIGHLIGHT_HELD_OUT: [f64; 4] = [-2.25, -0.75, 0.75, 2.25];
 /// The fit set and the held-out set.
 #[derive(Debug, Clone)]
 pub struct Sets<T> {
+    /// The ones the quadrature is fitted to.
     pub fit: Vec<T>,
+    /// The ones only checked, to estimate its error elsewhere.
     pub held_out: Vec<T>,
 }
 
@@ -473,7 +475,9 @@ fn glossy_pigment<T>(
 /// chosen quadrature erred most on them ([`coverage`]).
 #[derive(Debug, Clone)]
 pub struct TexelChoice {
+    /// How many of the most different texels are fitted.
     pub fitted: usize,
+    /// Texels added to the fit: (index in [`Scene::lightings`], the texel's coefficients).
     pub added: Vec<(usize, Vec<f64>)>,
 }
 

@@ -17,16 +17,21 @@ pub const REFERENCE_STEP_NM: f64 = 1.0;
 /// One wavelength count.
 #[derive(Debug, Clone, Copy, serde::Serialize)]
 pub struct SweepRow {
+    /// Wavelengths rendered, evenly over 380..780 nm.
     pub samples: usize,
+    /// Their spacing in nm.
     pub step_nm: f64,
     /// The fastest of the repeats: CPU render, or GPU dispatch until idle.
     pub frame_ms: f64,
     /// GPU only: with upload and readback.
     pub frame_with_transfers_ms: Option<f64>,
+    /// Mean CIEDE2000 over the pixels against the 1 nm render.
     #[serde(rename = "mean_dE2000")]
     pub mean_de2000: f64,
+    /// Nearest-rank 99th percentile CIEDE2000 against the 1 nm render.
     #[serde(rename = "p99_dE2000")]
     pub p99_de2000: f64,
+    /// Largest CIEDE2000 against the 1 nm render.
     #[serde(rename = "max_dE2000")]
     pub max_de2000: f64,
 }
@@ -34,14 +39,23 @@ pub struct SweepRow {
 /// A measured curve.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct SweepReport {
+    /// [`Scene::name`].
     pub scene: String,
+    /// Image width in pixels.
     pub width: usize,
+    /// Image height in pixels.
     pub height: usize,
+    /// The renderer measured.
     pub backend: Backend,
+    /// The GPU adapter's name; None on the CPU.
     pub adapter: Option<String>,
+    /// Frames rendered per wavelength count (the fastest is kept).
     pub repeats: usize,
+    /// The reference's wavelength step in nm ([`REFERENCE_STEP_NM`]).
     pub reference_step_nm: f64,
+    /// Time of the one reference frame in ms, measured as [`SweepRow::frame_ms`].
     pub reference_frame_ms: f64,
+    /// One row per wavelength count, in the order asked for.
     pub rows: Vec<SweepRow>,
 }
 
@@ -132,9 +146,11 @@ pub fn sweep(
 /// reference render.
 #[derive(Debug, Clone, Copy, serde::Serialize)]
 pub struct Measured {
+    /// The fastest frame in ms: CPU render, or GPU dispatch until idle.
     pub frame_ms: f64,
     /// GPU only: with upload and readback.
     pub frame_with_transfers_ms: Option<f64>,
+    /// The last frame's image against the reference.
     pub comparison: super::Comparison,
 }
 
@@ -161,8 +177,11 @@ pub fn reference(
 /// least `at_least`, then more until `seconds` have passed, at most `at_most`.
 #[derive(Debug, Clone, Copy)]
 pub struct Rounds {
+    /// Rounds always rendered (at least 1).
     pub at_least: usize,
+    /// Seconds from the start after which no round beyond `at_least` begins.
     pub seconds: f64,
+    /// Most rounds, unless `at_least` is more.
     pub at_most: usize,
 }
 
