@@ -2,7 +2,7 @@
 //! (wavelength step, integration rule, upsampling mode, thin-film thickness, render sample count),
 //! side by side, as a markdown table, JSON and plots.
 
-use super::render::BackendArg;
+use super::render_args::BackendArg;
 use anyhow::Context;
 use clap::Args;
 use specmap::colorimetry::{Observer, RgbSpace};

@@ -1,7 +1,7 @@
 //! `specmap color`: the colour of a light, or of a reflectance under a light.
 
 use super::outln;
-use super::render::QuadratureArg;
+use super::render_args::QuadratureArg;
 use super::tolerance::tolerance_options;
 use super::SpaceArg;
 use clap::Args;

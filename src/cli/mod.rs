@@ -10,6 +10,8 @@ mod fit;
 mod guard;
 mod inspect;
 mod render;
+mod render_args;
+mod render_scene;
 mod rendition;
 mod roundtrip;
 pub(crate) mod runtime_dir;
@@ -82,7 +84,7 @@ enum Command {
     /// Fit the paper's basis weights w_R, w_G, w_B for a main light; exact and non-negative modes.
     Fit(fit::FitArgs),
     /// Spectral preview render (Eq. 1 Phong, thin films) of the paper's scenes, GPU or CPU.
-    Render(Box<render::RenderArgs>),
+    Render(Box<render_args::RenderArgs>),
     /// Colour rendition: ColorChecker patches lit by a spectral map and by its truth (CIEDE2000).
     Rendition(rendition::RenditionArgs),
     /// Integrate a spectral EXR back to RGB and compare with its RGB preview (CIEDE2000).

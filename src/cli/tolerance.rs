@@ -3,7 +3,7 @@
 //! grid, the cost, the fit within its budget), with a spinner saying which stage it is at.
 
 use super::outln;
-use super::render::{QuadratureArg, RenderArgs};
+use super::render_args::{QuadratureArg, RenderArgs};
 use specmap::colorimetry::RgbSpace;
 use specmap::quadrature::cache::Cache;
 use specmap::quadrature::choose::{Family, Selection};

@@ -7,7 +7,7 @@ use super::probe::Probe;
 use super::script::{FrameRecord, Report, Step};
 use super::settings::Settings;
 use super::worker::{Done, Frame, Job, Wavelengths};
-use crate::cli::render::RenderArgs;
+use crate::cli::render_args::RenderArgs;
 use eframe::egui;
 use specmap::quadrature::choose::Selection;
 use specmap::quadrature::Quadrature;
@@ -396,7 +396,7 @@ impl App {
         let _ = self.jobs.send(Job::Probe {
             x,
             y,
-            observer: crate::cli::render::spectral_of(&self.args)
+            observer: crate::cli::render_scene::spectral_of(&self.args)
                 .map(|s| s.observer)
                 .unwrap_or_default(),
         });
@@ -551,7 +551,7 @@ impl App {
 
 /// The interim uniform grid: `--samples`/`--step` if given, else every [`INTERIM_STEP_NM`].
 pub(crate) fn interim(args: &RenderArgs) -> anyhow::Result<Wavelengths> {
-    let s = crate::cli::render::spectral_of(args)?;
+    let s = crate::cli::render_scene::spectral_of(args)?;
     let grid = if args.samples.is_some() || args.step.is_some() {
         s.grid
     } else {

@@ -6,7 +6,7 @@
 //! at a time (a refit waits for the running fit, whose result is kept only if it still
 //! covers the settings).
 
-use crate::cli::render::{QuadratureArg, RenderArgs};
+use crate::cli::render_args::{QuadratureArg, RenderArgs};
 use crate::cli::tolerance::tolerance_options;
 use specmap::quadrature::choose::{Family, Selection};
 use specmap::quadrature::Kind;
@@ -87,7 +87,7 @@ fn scale_between(a: &Film, b: &Film) -> Option<f64> {
 
 /// The main objects' films of the scene `args` describe (no map needed).
 pub(crate) fn films(args: &RenderArgs) -> anyhow::Result<Vec<Option<Film>>> {
-    let scene = crate::cli::render::scene_from(args, args.preset(), (8, 8), None)?;
+    let scene = crate::cli::render_scene::scene_from(args, args.preset(), (8, 8), None)?;
     Ok(main_films(&scene))
 }
 
@@ -113,7 +113,7 @@ fn sweep_scales(films: &[Option<Film>], range: Option<&str>) -> anyhow::Result<(
         return Ok((1.0, 1.0));
     }
     match range {
-        Some(r) => crate::cli::render::fit_range(r),
+        Some(r) => crate::cli::render_args::fit_range(r),
         None => Ok((1.0 - COVER, 1.0 + COVER)),
     }
 }
@@ -144,7 +144,7 @@ pub(crate) enum Mode {
 }
 
 pub(crate) fn mode(args: &RenderArgs) -> anyhow::Result<Mode> {
-    let spectral = crate::cli::render::spectral_of(args)?;
+    let spectral = crate::cli::render_scene::spectral_of(args)?;
     Ok(match (args.tolerance, args.quadrature) {
         (None, Some(QuadratureArg::Meyer)) => Mode::Meyer(Quadrature::meyer(spectral.observer)?),
         (None, Some(QuadratureArg::Scene)) => anyhow::bail!(
@@ -204,7 +204,7 @@ pub(crate) fn start(
         anyhow::bail!("the settings do not ask for a fit");
     };
     let opts = tolerance_options(tolerance, budget, args.quadrature)?;
-    let spectral = crate::cli::render::spectral_of(args)?;
+    let spectral = crate::cli::render_scene::spectral_of(args)?;
     let stage = Arc::new(Mutex::new("starting".to_string()));
     let (tx, rx) = channel();
     let args = args.clone();
@@ -341,7 +341,7 @@ mod tests {
         // The command's range: the fitted scales relative to the film now; 1:1 without one.
         let (s2, a2) = at(&with(&[("film", "2.7:300")]));
         let r = range_for(&fitted, &now(&s2, &a2).unwrap());
-        let (lo, hi) = crate::cli::render::fit_range(&r).unwrap();
+        let (lo, hi) = crate::cli::render_args::fit_range(&r).unwrap();
         assert!(
             (lo * 300.0 - 0.85 * 270.0).abs() < 1e-9 && (hi * 300.0 - 1.15 * 270.0).abs() < 1e-9
         );

@@ -12,7 +12,7 @@ mod settings;
 mod ui;
 mod worker;
 
-use crate::cli::render::RenderArgs;
+use crate::cli::render_args::RenderArgs;
 use clap::Args;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};

@@ -3,7 +3,7 @@
 //! accepts and what it shows is one `specmap render` command away.
 
 use crate::cli::demo::sh;
-use crate::cli::render::RenderArgs;
+use crate::cli::render_args::RenderArgs;
 
 /// Options that only `render`'s still output or report use: never part of what is shown.
 const STILL_ONLY: [&str; 3] = ["output", "turntable", "frames"];
@@ -88,7 +88,7 @@ impl Settings {
                 continue;
             }
             words.push(format!("--{k}"));
-            if !crate::cli::render::FLAGS.contains(&k.as_str()) {
+            if !crate::cli::render_args::FLAGS.contains(&k.as_str()) {
                 words.push(sh(v));
             }
         }

@@ -49,7 +49,7 @@ impl UiState {
         };
         let orbit = s
             .get("orbit")
-            .and_then(|o| crate::cli::render::orbit(o).ok())
+            .and_then(|o| crate::cli::render_args::orbit(o).ok())
             .map_or([0.0, 0.0], |o| [o.yaw_deg, o.pitch_deg]);
         UiState {
             env: text("env"),
@@ -307,7 +307,7 @@ fn wavelengths(app: &mut App, ui: &mut egui::Ui) {
     let mode = match (a.tolerance, a.max_nodes, a.quadrature) {
         (Some(_), Some(_), _) => "budget",
         (Some(_), None, _) => "fitted",
-        (None, _, Some(crate::cli::render::QuadratureArg::Meyer)) => "meyer",
+        (None, _, Some(crate::cli::render_args::QuadratureArg::Meyer)) => "meyer",
         _ => "uniform",
     };
     let clear = ["tolerance", "max-nodes", "quadrature", "step", "samples"];

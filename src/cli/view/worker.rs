@@ -3,7 +3,8 @@
 //! renders it on the GPU (or the CPU where `--backend cpu` says so) and probes pixels. The
 //! window sends jobs and draws what comes back; the newest frame job replaces any still queued.
 
-use crate::cli::render::{self, BackendArg, RenderArgs};
+use crate::cli::render_args::{BackendArg, RenderArgs};
+use crate::cli::render_scene;
 use specmap::colorimetry::RgbSpace;
 use specmap::quadrature::Quadrature;
 use specmap::render::env::EnvReport;
@@ -171,7 +172,7 @@ pub(crate) fn scene(
         Some(p) => {
             let k = (p.clone(), args.light.clone());
             if !envs.contains_key(&k) {
-                if let Some(l) = render::load_env(args)? {
+                if let Some(l) = render_scene::load_env(args)? {
                     envs.insert(k.clone(), l);
                 }
             }
@@ -180,7 +181,7 @@ pub(crate) fn scene(
         None => None,
     };
     let (lighting, report) = lighting.unzip();
-    let scene = render::scene_from(args, args.preset(), args.image_size()?, lighting)?;
+    let scene = render_scene::scene_from(args, args.preset(), args.image_size()?, lighting)?;
     Ok((scene, report))
 }
 
