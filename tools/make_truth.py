@@ -136,7 +136,7 @@ def light(kind, name, wl):
 
 
 # ----------------------------------------------------------------------------------------------
-# Lat-long geometry (OpenEXR orientation, pixel centres at (i + 0.5) / N, as specmap's layout.rs)
+# Lat-long geometry (OpenEXR orientation, pixel centres at (i + 0.5) / N, as specmap's src/envmap/layout/)
 
 
 def latlong_dirs(w, h, ss=1):

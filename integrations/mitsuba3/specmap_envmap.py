@@ -157,7 +157,7 @@ def _read_basis_v1(path, header, channels):
     """``--format basis``: L = c_R B0 + c_G B1 + c_B B2 (times 2^EV) + sun * sunSPD.
 
     The writer divides c_R, c_G, c_B by 2^EV but stores the ``sun`` channel (the sun pixels'
-    luminance, the weight of the sun's SPD) unscaled (exrio's ``unscaled`` list), so only the
+    luminance, the weight of the sun's SPD) unscaled (the spectral writer's ``unscaled`` list), so only the
     three coefficients are multiplied back."""
     wavelengths = _floats(path, header, "specmap.wavelengths")
     n = wavelengths.size
