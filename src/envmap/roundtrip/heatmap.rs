@@ -49,16 +49,22 @@ pub const HIGH_PERCENTILE: f64 = 99.9;
 /// The colour bar's range: errors at `low` and below are black, at `high` and above white.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct Range {
+    /// How errors map to the colour bar.
     pub scale: Scale,
+    /// CIEDE2000 at the bottom of the bar (drawn black).
     pub low: f64,
+    /// CIEDE2000 at the top of the bar (drawn white).
     pub high: f64,
+    /// Where `low` came from.
     pub low_from: Bound,
+    /// Where `high` came from.
     pub high_from: Bound,
 }
 
 /// What was drawn: the range, how many pixels fell outside it and how many were not compared.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct Heatmap {
+    /// The colour bar's range.
     pub range: Range,
     /// Pixels above `high` (drawn white).
     pub above: usize,

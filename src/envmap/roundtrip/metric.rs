@@ -20,6 +20,7 @@ pub struct RgbMetric {
 }
 
 impl RgbMetric {
+    /// The metric of linear RGB pixels of `space`.
     pub fn new(space: &RgbSpace) -> RgbMetric {
         let m = space.to_xyz_matrix();
         RgbMetric {

@@ -18,14 +18,22 @@ use std::path::Path;
 /// The result of a file round trip.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct FileRoundTrip {
+    /// The file's path, as given.
     pub file: String,
+    /// Width in pixels.
     pub width: usize,
+    /// Height in pixels.
     pub height: usize,
+    /// The map's layout (its `envmap` attribute, else told from its size); None: neither tells it,
+    /// and every pixel weighs the same.
     pub layout: Option<Layout>,
+    /// Number of spectral bands.
     pub wavelengths: usize,
+    /// Wavelengths of the first and last band (nm).
     pub range_nm: [f64; 2],
     /// The space of the R, G, B channels (its `chromaticities`, else `specmap.space`).
     pub space: String,
+    /// That space's primaries and white (CIE 1931 xy).
     pub chromaticities: Chromaticities,
     /// The main light's RGB the spectra were divided by (the paper's white balance), from the
     /// `specmap.lightRGB` attribute; None for files without it.
@@ -36,6 +44,7 @@ pub struct FileRoundTrip {
     pub all: RoundTripStats,
     /// Pixels not marked in the `sun` channel (all pixels when the file has none).
     pub without_sun: RoundTripStats,
+    /// Pixels marked in the `sun` channel (0 when the file has none).
     pub sun_pixels: usize,
     /// Pixels left out because a band or an R, G, B value is NaN or infinite (or their
     /// integral overflows).

@@ -54,7 +54,9 @@ const FLOOR_RULE: &str = "2^-13 of the map's 99th-percentile luminance by solid 
 /// The pixels below the floor: counted, not in the statistic.
 #[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
 pub struct BelowFloor {
+    /// Pixels below the floor (black pixels aside).
     pub pixels: usize,
+    /// Largest CIEDE2000 among them.
     pub max_de2000: f64,
     /// Their share of the energy (luminance x solid angle) of the set of pixels measured.
     pub energy_share: f64,
@@ -67,6 +69,7 @@ pub struct RoundTripStats {
     pub pixels: usize,
     /// Energy-weighted (luminance x solid angle) mean CIEDE2000.
     pub weighted_mean_de2000: f64,
+    /// Largest CIEDE2000 in the statistic.
     pub max_de2000: f64,
     /// Pixel (x, y) of the maximum (None without pixels).
     pub max_at: Option<[usize; 2]>,
@@ -74,6 +77,7 @@ pub struct RoundTripStats {
     pub max_luminance: f64,
     /// The floor the statistic was taken at (see [`Floor`]).
     pub luminance_floor: f64,
+    /// The pixels below the floor, counted apart.
     pub below_floor: BelowFloor,
     /// Pixels of no luminance (black, or negative): no colour to compare.
     pub black_pixels: usize,
