@@ -17,7 +17,9 @@ pub const MAX_ANALYSIS_WIDTH: usize = 2048;
 /// The lat-long cells of a map, in true linear RGB.
 #[derive(Debug, Clone)]
 pub struct Cells {
+    /// Width in cells.
     pub width: usize,
+    /// Height in cells (half the width: a lat-long).
     pub height: usize,
     /// True (D65-referenced) linear RGB of each cell, row-major from the top-left.
     pub rgb: Vec<[f32; 3]>,
@@ -99,10 +101,12 @@ impl Cells {
         }
     }
 
+    /// Number of cells (width x height).
     pub fn len(&self) -> usize {
         self.rgb.len()
     }
 
+    /// Whether there are no cells.
     pub fn is_empty(&self) -> bool {
         self.rgb.is_empty()
     }

@@ -38,25 +38,46 @@ use crate::envmap::convert::pixel_spectra::daylight_coloured;
 use crate::error::Result;
 use nalgebra::Vector3;
 
+/// The sun's peak is at least this many times the map's median luminance.
 pub const SUN_CONTRAST: f64 = 100.0;
+/// Lowest elevation of the sun's direction (degrees; just below 0, for a sun on the horizon).
 pub const SUN_MIN_ELEVATION_DEG: f64 = -1.0;
+/// The sun's colour lies at most this far from the Planckian locus (|Duv|, CIE 1960 uv).
 pub const SUN_MAX_DUV: f64 = 0.02;
+/// No other emitter's peak (the sun's reflections aside) reaches this fraction of the sun's.
 pub const SUN_UNIQUE: f64 = 0.1;
+/// A bright daylight-coloured emitter is a window or sky from this CCT up (K).
 pub const WINDOW_MIN_K: f64 = 5000.0;
+/// A bright daylight-coloured emitter is a window or sky from this solid angle up (sr).
 pub const WINDOW_MIN_SR: f64 = 0.002;
+/// A dim daylight-coloured region, or a bright patch above the horizon, is sky or a window from
+/// this CCT up (K).
 pub const SKY_MIN_K: f64 = 4000.0;
+/// A dim daylight-coloured region is sky or a window from this solid angle up (sr).
 pub const SKY_MIN_SR: f64 = 0.02;
+/// A colour within this CIE 1960 uv distance of a lamp's white, or of a mix of two lamps' or of a
+/// lamp's and a window's, is explained by them: a surface they light.
 pub const EXPLAINED_UV: f64 = 0.006;
+/// A daylight-coloured region of a window's colour and this many times dimmer than it is a wall the
+/// window lights.
 pub const LIT_BY_WINDOW: f64 = 20.0;
 /// A region reaching the zenith this much dimmer than the brightest lamp is a night sky even of a
 /// lamp's colour (moonlight: 1e-5 of a street lamp; a wall a lamp lights: 1e-2).
 pub const NIGHT_SKY_CONTRAST: f64 = 1e-3;
+/// A daylight region reaching this elevation (degrees above the horizon) is the sky, not a window.
 pub const SKY_TOP_DEG: f64 = 60.0;
+/// A daylight region covering this solid angle (sr) is the sky, however low.
 pub const SKY_LARGE_SR: f64 = 1.0;
+/// CIE 1960 uv distance within which a colour matches: a lamp's white (in daylight, an emitter
+/// farther from every white is a surface), or the sun's (below the horizon, a reflection of it).
 pub const LAMP_MATCH_UV: f64 = 0.01;
+/// With daylight about, an emitter this many times brighter than the sky's and windows' bright
+/// parts is a lamp wherever it lies and whatever its colour.
 pub const DAYLIGHT_LAMP_CONTRAST: f64 = 10.0;
 /// An emitter candidate this much dimmer than a lamp, and near its colour, is a surface it lights.
 pub const LIT_BY_LAMP: f64 = 0.05;
+/// CIE 1960 uv distance from a lamp's colour within which a far dimmer emitter ([`LIT_BY_LAMP`]) is
+/// a surface it lights.
 pub const LIT_COLOUR_UV: f64 = 0.05;
 /// A lamp's pixels are those at least this fraction of its peak luminance.
 pub const LAMP_CORE: f64 = 0.25;
@@ -70,13 +91,18 @@ pub const MAX_EMITTERS: usize = 256;
 pub struct Colour {
     /// XYZ with Y = 1.
     pub xyz: Vector3<f64>,
+    /// CIE 1931 xy chromaticity.
     pub xy: [f64; 2],
+    /// CIE 1960 uv chromaticity.
     pub uv: [f64; 2],
+    /// Correlated colour temperature (K); None more than 0.05 uv (CIE 1960) from the locus.
     pub cct_k: Option<f64>,
+    /// Signed distance from the Planckian locus in CIE 1960 uv (positive: greenish).
     pub duv: f64,
 }
 
 impl Colour {
+    /// Measures the colour `xyz` (any scale; scaled to Y = 1 where Y > 0).
     pub fn of(xyz: Vector3<f64>) -> Result<Colour> {
         let xyz = if xyz[1] > 0.0 { xyz / xyz[1] } else { xyz };
         let x = Xyz::new(xyz[0], xyz[1], xyz[2]);
@@ -112,7 +138,9 @@ impl Colour {
 /// The lights found, and the bright regions that are not lights.
 #[derive(Debug, Clone, Default)]
 pub struct Classified {
+    /// The lights: the sun first, then the sky, the windows and the lamps.
     pub lights: Vec<Light>,
+    /// Bright regions that are not lights, each with why in words (first: why there is no sun).
     pub bright_reflectors: Vec<String>,
 }
 

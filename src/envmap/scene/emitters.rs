@@ -31,6 +31,7 @@ const CORE_FRACTION: f64 = 0.1;
 const HALO_RINGS: usize = 3;
 
 impl Levels {
+    /// The levels of `cells`, emitter candidates at `contrast` times the median luminance.
     pub fn of(cells: &Cells, contrast: f64) -> Levels {
         let total_energy: f64 = (0..cells.len())
             .map(|i| cells.y[i] as f64 * cells.omega(i))
@@ -78,15 +79,20 @@ impl Cells {
 /// A connected region of emitter candidates.
 #[derive(Debug, Clone)]
 pub struct Emitter {
+    /// Its cells (indices, sorted).
     pub cells: Vec<usize>,
+    /// The region's measures: energy, solid angle, direction, colour, extent.
     pub stats: RegionStats,
-    /// The cells within [`CORE_FRACTION`] of its peak (a sun's disc, a lamp's bulb).
+    /// The cells at least `CORE_FRACTION` (0.1) of its peak luminance: a sun's disc, a bulb.
     pub core: Vec<usize>,
+    /// Solid angle of its core (sr).
     pub core_solid_angle_sr: f64,
     /// Its colour as XYZ with Y = 1: of its core; where the core is clipped, of the rest of the
     /// region or of its halo (the unclipped glow around it).
     pub colour: Vector3<f64>,
+    /// Its colour was taken from outside its clipped core (the rest of the region or its halo).
     pub colour_from_halo: bool,
+    /// Its cells at the clip level ([`Levels::is_clipped`]).
     pub clipped_cells: usize,
 }
 

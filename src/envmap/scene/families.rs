@@ -22,15 +22,22 @@ use std::sync::OnceLock;
 pub enum Family {
     /// Incandescent and halogen: a Planckian radiator.
     Incandescent,
+    /// Fluorescent tubes and compact lamps (CIE FL1-FL12).
     Fluorescent,
+    /// White LEDs (CIE LED-*).
     Led,
+    /// High-pressure sodium (CIE HP1, HP2 and the `hps` table).
     HighPressureSodium,
+    /// Low-pressure sodium (the `lps` table).
     LowPressureSodium,
+    /// Mercury vapour (the `mercury` table).
     Mercury,
+    /// Metal halide (CIE HP3-HP5 and the `metal-halide` table).
     MetalHalide,
 }
 
 impl Family {
+    /// The family's name in the report: `incandescent/halogen`, `LED`, `high-pressure sodium`.
     pub fn name(self) -> &'static str {
         match self {
             Family::Incandescent => "incandescent/halogen",
@@ -109,7 +116,7 @@ pub const SAME_WHITE_UV: f64 = 0.0015;
 pub const AMBIGUITY_UV: f64 = 0.003;
 
 /// How far (CIE 1960 uv) a strip's white may lie from a triphosphor table's for that table to
-/// be taken over a halophosphate one ([`triphosphor_instead`]): about 1000 K at 3500 K.
+/// be taken over a halophosphate one (`triphosphor_instead`): about 1000 K at 3500 K.
 pub const TRIPHOSPHOR_REACH_UV: f64 = 0.02;
 
 /// A region this elongated (long axis over short) is a tube or a strip.
@@ -166,6 +173,7 @@ pub fn planckian_uv(kelvin: f64) -> [f64; 2] {
 pub struct LampMatch {
     /// A built-in table name, or `Planckian <K> K` for a filament.
     pub spd: String,
+    /// The matched table's family.
     pub family: Family,
     /// Distance in CIE 1960 uv from the lamp's colour to the matched white.
     pub distance_uv: f64,

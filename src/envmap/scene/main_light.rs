@@ -28,13 +28,14 @@ pub struct LightChoice {
     pub exterior: bool,
     /// The reason, in words.
     pub reason: String,
-    /// Chromaticity and CCT of the brightest regions (energy-weighted).
+    /// CIE 1931 xy chromaticity of the brightest regions (energy-weighted).
     pub bright_xy: [f64; 2],
+    /// CCT and Duv of the brightest regions' colour.
     pub bright_cct: Cct,
 }
 
 /// The energy-weighted mean linear RGB of a map's brightest regions: its brightest pixels that
-/// together carry [`BRIGHT_SHARE`] of its energy (luminance x solid angle).
+/// together carry `BRIGHT_SHARE` (a quarter) of its energy (luminance x solid angle).
 pub fn bright_regions(map: &EnvMap, space: &RgbSpace) -> [f64; 3] {
     let img = &map.image;
     let m = space.to_xyz_matrix();
@@ -143,6 +144,7 @@ pub fn choose(map: &EnvMap, sun: Option<(f64, f64)>, space: &RgbSpace) -> Result
 /// What the white premise is, and why.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct WhiteChoice {
+    /// The premise chosen: what RGB (1,1,1) is.
     pub premise: WhitePremise,
     /// The reason, in words.
     pub reason: String,

@@ -36,9 +36,13 @@ pub use reflectors::{ReflectorModel, Reflectors};
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum LightKind {
+    /// The sun: a compact, very bright emitter of daylight or Planckian colour, seen with daylight.
     Sun,
+    /// The sky: the daylight-coloured regions above the horizon reaching high or wide, as one.
     Sky,
+    /// A window: a daylight-coloured region that is not the sky (lower and smaller).
     Window,
+    /// A lamp: any other emitter, matched to a lamp family.
     Lamp,
 }
 
@@ -48,11 +52,20 @@ pub enum LightKind {
 pub enum LightSpd {
     /// The CIE daylight (S0, S1, S2) of the light's own colour (a Planckian radiator where the
     /// colour is warmer than the daylight family reaches).
-    Daylight { cct_k: f64 },
+    Daylight {
+        /// Correlated colour temperature (K).
+        cct_k: f64,
+    },
     /// A table by name (a matched lamp, or `--light NAME`).
-    Table { name: String },
+    Table {
+        /// A spectrum name or file, as [`crate::data::spectrum`] reads it.
+        name: String,
+    },
     /// A black body (a filament lamp).
-    Planckian { cct_k: f64 },
+    Planckian {
+        /// Temperature of the black body (K).
+        cct_k: f64,
+    },
 }
 
 impl LightSpd {
@@ -88,29 +101,39 @@ impl LightSpd {
 /// One light of the scene.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct Light {
+    /// What kind of light it is.
     pub kind: LightKind,
     /// The spectrum's name (see [`LightSpd::label`]).
     pub spd: String,
+    /// The spectrum it is given.
     #[serde(skip)]
     pub spd_choice: LightSpd,
+    /// Correlated colour temperature of its colour (K); None more than 0.05 uv (CIE 1960) from
+    /// the Planckian locus.
     #[serde(rename = "cct_K")]
     pub cct_k: Option<f64>,
+    /// Its colour's signed distance from the Planckian locus in CIE 1960 uv (positive: greenish).
     pub duv: f64,
+    /// Its colour's CIE 1931 xy chromaticity.
     pub xy: [f64; 2],
     /// Analysis cells (the map's pixels for a lat-long up to 2048 wide).
     pub pixels: usize,
+    /// Solid angle of its cells (sr).
     pub solid_angle_sr: f64,
     /// Its share of the map's energy (luminance x solid angle).
     pub energy_share: f64,
     /// Energy-weighted mean direction (unit vector, OpenEXR's axes: Y up).
     pub direction: [f64; 3],
+    /// Elevation of its direction above the horizon (degrees).
     pub elevation_deg: f64,
-    /// Its pixels at the clip level, and whether its colour was taken from its halo.
+    /// Its analysis cells at the clip level.
     pub clipped_pixels: usize,
+    /// Its colour was taken from outside its clipped core (the rest of its region or its halo).
     pub colour_from_halo: bool,
     /// The lamp match (lamps only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub lamp: Option<LampMatch>,
+    /// Why it is this kind of light, in words.
     pub reason: String,
     /// Its colour as XYZ with Y = 1.
     #[serde(skip)]
@@ -129,6 +152,7 @@ pub struct SceneSettings {
     pub contrast: f64,
     /// `--light NAME`: every lamp has this spectrum (the sun, sky and windows keep daylight).
     pub lamps: Option<String>,
+    /// How the light reaching each reflector is estimated (`--reflectors`).
     pub reflectors: ReflectorModel,
 }
 
@@ -149,13 +173,17 @@ pub const REFLECTOR: u16 = u16::MAX;
 /// The analysed scene.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct Scene {
+    /// The luminance levels the emitters were found against.
     pub levels: Levels,
+    /// The lights: the sun first, then the sky, the windows and the lamps.
     pub lights: Vec<Light>,
     /// Bright regions that are not lights, and why (sunlit walls, reflections of the sun).
     pub bright_reflectors: Vec<String>,
     /// The share of the energy the lights do not hold.
     pub reflector_energy_share: f64,
+    /// The mixes of the lights' spectra that light the reflectors.
     pub reflectors: Reflectors,
+    /// The analysis grid.
     #[serde(skip)]
     pub cells: Cells,
     /// Per cell: the index of its light, or [`REFLECTOR`].
@@ -164,6 +192,7 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// The sun, if the scene has one.
     pub fn sun(&self) -> Option<&Light> {
         self.lights.iter().find(|l| l.kind == LightKind::Sun)
     }

@@ -30,10 +30,14 @@ pub fn kind_colour(kind: LightKind) -> [u8; 3] {
 /// What was drawn.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct Overlay {
+    /// The PNG's size in pixels (width, height): the map, enlarged to at least [`MIN_WIDTH`], and
+    /// the legend beneath.
     pub image_size: [usize; 2],
+    /// How many image pixels wide and high each map pixel is drawn.
     pub zoom: usize,
     /// The exposure that puts the map's median luminance at mid-grey.
     pub exposure: f64,
+    /// Lights numbered on the map and named in the legend (at most [`MAX_LISTED`], by energy).
     pub lights_listed: usize,
 }
 

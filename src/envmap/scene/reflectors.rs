@@ -17,12 +17,15 @@ use super::{Light, REFLECTOR};
 use crate::colorimetry::Xyz;
 use nalgebra::Vector3;
 
+/// How the light reaching each reflector is estimated (`--reflectors`).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 #[serde(tag = "model", rename_all = "lowercase")]
 pub enum ReflectorModel {
+    /// Every reflector is lit by all lights in the proportions of their energy.
     Global,
-    /// `prior`: how strongly the mix is pulled towards the global one (0: the colours alone).
+    /// The mix is read from the colours of the reflectors around each pixel (a local grey world).
     Local {
+        /// How strongly the mix is pulled towards the global one (0: the colours alone).
         prior: f64,
     },
 }
@@ -33,6 +36,7 @@ impl Default for ReflectorModel {
     }
 }
 
+/// Width (sigma) of the `local` model's Gaussian window on the sphere (degrees).
 pub const LOCAL_SIGMA_DEG: f64 = 20.0;
 /// The default pull towards the global mix, chosen by measurement on the truth scenes
 /// (docs/scenes.md): with the grey world read from the surfaces that could be grey
@@ -42,8 +46,9 @@ pub const LOCAL_SIGMA_DEG: f64 = 20.0;
 /// around them towards it).
 pub const LOCAL_PRIOR: f64 = 0.1;
 /// The CIE 1960 uv distance from the lights' whites at which a reflector counts half in its
-/// neighbourhood's grey world ([`neutral_weight`]).
+/// neighbourhood's grey world (`neutral_weight`).
 pub const NEUTRAL_UV: f64 = 0.003;
+/// Width of the coarse lat-long grid the mixes are kept on (cells; its height is half).
 pub const GRID_WIDTH: usize = 64;
 
 /// A distinct light spectrum that reflectors can be lit by.
@@ -61,7 +66,9 @@ pub struct Carrier {
 /// The mixes of light spectra that light the reflectors.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct Reflectors {
+    /// The model the mixes were estimated with.
     pub model: ReflectorModel,
+    /// The distinct light spectra, with their shares of the lights' energy.
     pub carriers: Vec<Carrier>,
     /// Per light of the scene: its carrier.
     #[serde(skip)]

@@ -37,13 +37,15 @@ pub fn components(cells: &Cells, mask: &[bool]) -> Vec<Vec<usize>> {
 pub struct RegionStats {
     /// Sum of luminance x solid angle.
     pub energy: f64,
+    /// Solid angle of its cells (sr).
     pub solid_angle_sr: f64,
     /// Energy-weighted mean direction (unit).
     pub direction: [f64; 3],
     /// Solid-angle-weighted mean XYZ (the region's colour and mean luminance).
     pub mean_xyz: Vector3<f64>,
-    /// Highest luminance and its cell.
+    /// Highest luminance of a cell.
     pub peak: f64,
+    /// The cell of that highest luminance.
     pub peak_cell: usize,
     /// Largest elevation of a cell (degrees): how near the zenith the region reaches.
     pub top_elevation_deg: f64,
@@ -52,6 +54,7 @@ pub struct RegionStats {
 }
 
 impl RegionStats {
+    /// Measures the cells `region` of `cells`.
     pub fn of(cells: &Cells, region: &[usize]) -> RegionStats {
         let (mut energy, mut omega) = (0.0, 0.0);
         let mut dir = [0.0f64; 3];

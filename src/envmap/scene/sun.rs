@@ -42,6 +42,7 @@ pub struct Sun {
     /// Indices (y * width + x) of the sun's pixels.
     #[serde(skip)]
     pub pixels: Vec<usize>,
+    /// Number of the sun's pixels.
     pub pixel_count: usize,
     /// Energy-weighted mean direction (unit vector, map space: Y up).
     pub direction: [f64; 3],
@@ -49,11 +50,13 @@ pub struct Sun {
     pub elevation_deg: f64,
     /// Angle from +Z towards +X (degrees).
     pub azimuth_deg: f64,
+    /// Solid angle of the region (sr).
     pub solid_angle_sr: f64,
     /// The region's share of the map's energy.
     pub energy_share: f64,
     /// Energy-weighted mean linear RGB of the region.
     pub mean_rgb: [f64; 3],
+    /// Luminance of its brightest pixel (Y, in the map's units).
     pub peak_luminance: f64,
     /// Correlated colour temperature of the region's mean colour.
     pub cct: Cct,
@@ -66,8 +69,10 @@ pub struct Sun {
 #[derive(Debug, Clone, serde::Serialize)]
 #[serde(tag = "found", rename_all = "lowercase")]
 pub enum SunSearch {
+    /// A sun, measured.
     #[serde(rename = "true")]
     Found(Sun),
+    /// No sun.
     #[serde(rename = "false")]
     NotFound {
         /// Why the brightest region is not a sun, in words.
@@ -76,6 +81,7 @@ pub enum SunSearch {
 }
 
 impl SunSearch {
+    /// The sun, if one was found.
     pub fn sun(&self) -> Option<&Sun> {
         match self {
             SunSearch::Found(s) => Some(s),
