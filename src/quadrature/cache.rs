@@ -186,13 +186,6 @@ impl Cache {
     }
 }
 
-/// A colour error as stored: JSON has no infinity, so an error that was not finite (a uniform
-/// grid that misses a lamp's line entirely) is written as null, and read back as infinite.
-pub fn error_or_infinite<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
-    let v: Option<f64> = serde::Deserialize::deserialize(d)?;
-    Ok(v.unwrap_or(f64::INFINITY))
-}
-
 impl Entry {
     /// Why an entry read for `key` is not to be trusted, if it is not.
     fn foreign(&self, key: &Key) -> Option<String> {

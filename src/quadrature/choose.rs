@@ -31,7 +31,7 @@ pub struct UniformTried {
     pub rule: Rule,
     /// Largest CIEDE2000 over the fit and held-out stimuli with that rule.
     #[serde(rename = "max_dE2000")]
-    #[serde(deserialize_with = "crate::quadrature::cache::error_or_infinite")]
+    #[serde(deserialize_with = "crate::quadrature::stored::error_or_infinite")]
     pub max: f64,
 }
 
@@ -47,7 +47,7 @@ pub struct UniformChoice {
     /// Number of wavelengths on the chosen grid.
     pub samples: usize,
     /// The chosen grid's largest CIEDE2000 over the fit and held-out stimuli.
-    #[serde(deserialize_with = "crate::quadrature::cache::error_or_infinite")]
+    #[serde(deserialize_with = "crate::quadrature::stored::error_or_infinite")]
     pub estimate_de2000: f64,
     /// Whether the chosen grid met the target (else it is the finest tried).
     pub met: bool,
@@ -89,7 +89,7 @@ pub struct Selection {
     #[serde(rename = "max_nodes")]
     pub budget: Option<usize>,
     /// The chosen quadrature's largest error over the fit and held-out stimuli.
-    #[serde(deserialize_with = "crate::quadrature::cache::error_or_infinite")]
+    #[serde(deserialize_with = "crate::quadrature::stored::error_or_infinite")]
     pub estimate_de2000: f64,
     /// Whether the estimate met the target.
     pub met: bool,
@@ -116,10 +116,10 @@ pub struct Selection {
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ImageCheck {
     /// Largest CIEDE2000 over the pixels checked.
-    #[serde(deserialize_with = "crate::quadrature::cache::error_or_infinite")]
+    #[serde(deserialize_with = "crate::quadrature::stored::error_or_infinite")]
     pub max_de2000: f64,
     /// Mean CIEDE2000 over the pixels checked.
-    #[serde(deserialize_with = "crate::quadrature::cache::error_or_infinite")]
+    #[serde(deserialize_with = "crate::quadrature::stored::error_or_infinite")]
     pub mean_de2000: f64,
     /// The pixel (x, y) of the largest.
     pub max_at: [usize; 2],

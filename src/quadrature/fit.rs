@@ -134,11 +134,11 @@ pub struct Tried {
     pub nodes: usize,
     /// Largest CIEDE2000 over the fit set.
     #[serde(rename = "fit_max_dE2000")]
-    #[serde(deserialize_with = "crate::quadrature::cache::error_or_infinite")]
+    #[serde(deserialize_with = "crate::quadrature::stored::error_or_infinite")]
     pub fit_max: f64,
     /// Largest CIEDE2000 over the held-out set (0 with none).
     #[serde(rename = "held_out_max_dE2000")]
-    #[serde(deserialize_with = "crate::quadrature::cache::error_or_infinite")]
+    #[serde(deserialize_with = "crate::quadrature::stored::error_or_infinite")]
     pub held_out_max: f64,
 }
 
@@ -152,19 +152,19 @@ pub struct Choice {
     /// `margin * tolerance`, what the estimate had to meet.
     pub target_de2000: f64,
     /// The largest error over the fit set and the held-out set: the estimate.
-    #[serde(deserialize_with = "crate::quadrature::cache::error_or_infinite")]
+    #[serde(deserialize_with = "crate::quadrature::stored::error_or_infinite")]
     pub estimate_de2000: f64,
     /// Largest CIEDE2000 over the fit set.
     #[serde(rename = "fit_max_dE2000")]
-    #[serde(deserialize_with = "crate::quadrature::cache::error_or_infinite")]
+    #[serde(deserialize_with = "crate::quadrature::stored::error_or_infinite")]
     pub fit_max: f64,
     /// Largest CIEDE2000 over the held-out set (0 with none).
     #[serde(rename = "held_out_max_dE2000")]
-    #[serde(deserialize_with = "crate::quadrature::cache::error_or_infinite")]
+    #[serde(deserialize_with = "crate::quadrature::stored::error_or_infinite")]
     pub held_out_max: f64,
     /// Mean CIEDE2000 over the held-out set (0 with none).
     #[serde(rename = "held_out_mean_dE2000")]
-    #[serde(deserialize_with = "crate::quadrature::cache::error_or_infinite")]
+    #[serde(deserialize_with = "crate::quadrature::stored::error_or_infinite")]
     pub held_out_mean: f64,
     /// The stimulus with the largest error.
     pub worst: String,

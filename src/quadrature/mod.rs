@@ -20,6 +20,7 @@ mod lsq;
 pub mod meyer;
 mod pnorm;
 pub mod progress;
+pub mod stored;
 
 use crate::colorimetry::{Cmfs, Observer, Xyz};
 use crate::error::{Error, Result};

@@ -62,7 +62,7 @@ pub(crate) struct App {
     window_shot: Arc<Mutex<Option<Arc<egui::ColorImage>>>>,
     out: Arc<Mutex<Option<Report>>>,
     pub(super) json: bool,
-    pub(super) ui: super::ui::UiState,
+    pub(super) ui: super::ui_state::UiState,
     /// Where the PNG and EXR buttons write (`-o`'s path, by extension; view.png by default).
     pub(super) output: PathBuf,
 }
@@ -81,7 +81,7 @@ impl App {
         let args = settings.parse()?;
         let interim = interim(&args)?;
         let mut app = App {
-            ui: super::ui::UiState::new(&settings),
+            ui: super::ui_state::UiState::new(&settings),
             settings,
             args,
             error: None,
@@ -121,7 +121,7 @@ impl App {
                 self.error = None;
                 if changed {
                     self.args = self.settings.parse().expect("checked by set_many");
-                    self.ui = super::ui::UiState::new(&self.settings);
+                    self.ui = super::ui_state::UiState::new(&self.settings);
                     self.follow_mode(None);
                 }
                 changed
@@ -565,9 +565,9 @@ pub(crate) fn interim(args: &RenderArgs) -> anyhow::Result<Wavelengths> {
     })
 }
 
-impl eframe::App for App {
-    /// A window closed by hand leaves its report too (printed under --json).
-    fn on_exit(&mut self) {
+impl App {
+    /// The report as the window leaves it, unless the script left one already.
+    pub(super) fn leave_report(&mut self) {
         if let Ok(mut o) = self.out.lock() {
             if o.is_none() {
                 *o = Some(self.report.clone());
@@ -575,15 +575,19 @@ impl eframe::App for App {
         }
     }
 
-    fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
-        let ctx = ui.ctx().clone();
-        self.poll(&ctx);
-        self.advance_script(&ctx);
+    /// Before a frame's widgets: what came from the worker and the script, the next frame
+    /// asked for.
+    pub(super) fn before_draw(&mut self, ctx: &egui::Context) {
+        self.poll(ctx);
+        self.advance_script(ctx);
         self.request_frame();
-        super::ui::draw(self, ui);
-        // Frames and fits wake the window when they end; while a fit runs, its status line
-        // ticks once a second. (Redrawing the window more often takes lavapipe's cores from
-        // the frames: a 512x512 frame took twice as long while the window redrew every 30 ms.)
+    }
+
+    /// After a frame's widgets: frames and fits wake the window when they end; while a fit
+    /// runs, its status line ticks once a second. (Redrawing the window more often takes
+    /// lavapipe's cores from the frames: a 512x512 frame took twice as long while the window
+    /// redrew every 30 ms.)
+    pub(super) fn after_draw(&self, ctx: &egui::Context) {
         if self.fit.is_some() || matches!(self.waiting, Some(Wait::Quadrature)) {
             ctx.request_repaint_after(std::time::Duration::from_secs(1));
         }

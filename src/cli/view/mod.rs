@@ -10,6 +10,7 @@ mod probe;
 mod script;
 mod settings;
 mod ui;
+mod ui_state;
 mod worker;
 
 use crate::cli::render_args::RenderArgs;

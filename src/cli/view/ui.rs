@@ -2,72 +2,9 @@
 //! picture (drag to orbit, scroll to zoom, click to probe), the status line and the probe.
 
 use super::app::App;
+use super::ui_state::UiState;
 use eframe::egui;
 use egui::{Color32, Pos2, Stroke, Vec2};
-
-/// Text fields and sliders between edits (applied on Enter or release).
-pub(crate) struct UiState {
-    env: String,
-    light: String,
-    substrate: String,
-    diffuse: String,
-    /// The film's layers: index text and thickness in nm.
-    layers: Vec<(String, f64)>,
-    pub(super) orbit: [f64; 2],
-    size: String,
-    samples: usize,
-    tolerance: f64,
-    budget: usize,
-}
-
-impl UiState {
-    pub(crate) fn new(s: &super::settings::Settings) -> UiState {
-        let text = |k: &str| s.get(k).unwrap_or_default().to_string();
-        let args = s.parse().ok();
-        let films = args.as_ref().and_then(|a| super::fit::films(a).ok());
-        let layers = match s.get("film") {
-            Some(f) => f
-                .split(',')
-                .filter_map(|p| p.rsplit_once(':'))
-                .map(|(n, d)| (n.trim().to_string(), d.trim().parse().unwrap_or(0.0)))
-                .collect(),
-            None => films
-                .iter()
-                .flatten()
-                .flatten()
-                .next()
-                .map(|f| {
-                    f.layers
-                        .iter()
-                        .map(|l| {
-                            let n = l.material().index_at(550.0).map_or(1.5, |i| i.n());
-                            (format!("{n}"), l.thickness_nm())
-                        })
-                        .collect()
-                })
-                .unwrap_or_default(),
-        };
-        let orbit = s
-            .get("orbit")
-            .and_then(|o| crate::cli::render_args::orbit(o).ok())
-            .map_or([0.0, 0.0], |o| [o.yaw_deg, o.pitch_deg]);
-        UiState {
-            env: text("env"),
-            light: s.get("light").unwrap_or("D65").to_string(),
-            substrate: text("substrate"),
-            diffuse: text("diffuse"),
-            layers,
-            orbit,
-            size: args
-                .as_ref()
-                .and_then(|a| a.image_size().ok())
-                .map_or(String::new(), |(w, h)| format!("{w}x{h}")),
-            samples: args.as_ref().and_then(|a| a.samples).unwrap_or(81),
-            tolerance: args.as_ref().and_then(|a| a.tolerance).unwrap_or(0.5),
-            budget: args.as_ref().and_then(|a| a.max_nodes).unwrap_or(8),
-        }
-    }
-}
 
 /// A slider that keeps a value outside its range as it is (a film of 1200 nm, an exposure of
 /// -10 EV from the command line): only the user's own drags are held to the range, so that
@@ -501,5 +438,21 @@ fn probe(app: &mut App, ui: &mut egui::Ui) {
     ));
     if ui.button("close").clicked() {
         app.probe = None;
+    }
+}
+
+/// The window's frame: what came from the worker and the script, the next frame asked for,
+/// the widgets drawn.
+impl eframe::App for App {
+    /// A window closed by hand leaves its report too (printed under --json).
+    fn on_exit(&mut self) {
+        self.leave_report();
+    }
+
+    fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
+        let ctx = ui.ctx().clone();
+        self.before_draw(&ctx);
+        draw(self, ui);
+        self.after_draw(&ctx);
     }
 }
