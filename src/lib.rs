@@ -12,6 +12,9 @@
 //! - [`quadrature`]: nodes and weight triples (uniform, Meyer's, fitted to a scene's spectra);
 //! - [`plot`], [`io`]: PNG/SVG plots and safe (temporary file + rename) output.
 
+// Every public item says what it is (the library's API; Cargo.toml's [lints] keep the rest).
+#![warn(missing_docs)]
+
 pub mod batch;
 pub mod colorimetry;
 pub mod data;
