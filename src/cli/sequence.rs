@@ -39,7 +39,11 @@ impl Sequence {
     /// The sequence `--turntable` or `--frames` asks for, with the film's range; None for a
     /// still.
     pub(crate) fn of(a: &RenderArgs, ratio: Option<f64>) -> anyhow::Result<Option<Sequence>> {
-        let orbit = a.orbit.as_deref().map(super::render_args::orbit).transpose()?;
+        let orbit = a
+            .orbit
+            .as_deref()
+            .map(super::render_args::orbit)
+            .transpose()?;
         Ok(match (a.turntable, a.frames, ratio) {
             (Some(0), ..) | (_, Some(0), _) => {
                 anyhow::bail!("a sequence needs at least one frame")
