@@ -20,7 +20,8 @@
 //!     &ConvertOptions::faithful(),
 //!     &|_done, _total| {},
 //! )?;
-//! println!("{} wavelengths, {:.2} mean CIEDE2000", report.wavelengths_nm.len(), report.roundtrip.mean);
+//! let rt = &report.roundtrip_without_sun;
+//! println!("{} wavelengths, CIEDE2000 {:.2}", report.wavelengths_nm.len(), rt.weighted_mean_de2000);
 //! # Ok::<(), specmap::Error>(())
 //! ```
 
