@@ -22,18 +22,18 @@ use crate::spectrum::{Rule, WavelengthGrid};
 use nalgebra::{DMatrix, SymmetricEigen};
 
 /// Meyer's four wavelengths.
-pub const MEYER_NODES: usize = 4;
+pub(crate) const MEYER_NODES: usize = 4;
 
 /// The range the rule is built on.
 const RANGE_NM: (f64, f64) = (380.0, 780.0);
 
 /// Meyer's rule with [`MEYER_NODES`] nodes.
-pub fn meyer(observer: Observer) -> Result<Quadrature> {
+pub(crate) fn meyer(observer: Observer) -> Result<Quadrature> {
     gauss(observer, MEYER_NODES)
 }
 
 /// The `n`-node Gauss rule for `ybar`, with interpolatory weights for all three functions.
-pub fn gauss(observer: Observer, n: usize) -> Result<Quadrature> {
+pub(crate) fn gauss(observer: Observer, n: usize) -> Result<Quadrature> {
     if !(1..=12).contains(&n) {
         return Err(Error::invalid(format!(
             "a Gauss rule of {n} nodes: between 1 and 12"

@@ -17,10 +17,10 @@ pub mod choose;
 pub mod estimate;
 pub mod fit;
 mod lsq;
-pub mod meyer;
+pub(crate) mod meyer;
 mod pnorm;
 pub mod progress;
-pub mod stored;
+pub(crate) mod stored;
 
 use crate::colorimetry::{Cmfs, Observer, Xyz};
 use crate::error::{Error, Result};

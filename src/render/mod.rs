@@ -71,20 +71,20 @@
 pub mod candidates;
 pub mod cpu;
 pub mod env;
-pub mod env_report;
+pub(crate) mod env_report;
 mod file_layout;
-pub mod fingerprint;
+pub(crate) mod fingerprint;
 pub mod gpu;
-pub mod gpu_layout;
-pub mod image;
-pub mod latlong;
+pub(crate) mod gpu_layout;
+pub(crate) mod image;
+pub(crate) mod latlong;
 pub mod own_spectra;
 pub mod plan;
 mod prefiltered;
 pub mod prepare;
 pub mod presets;
-pub mod radiance_limit;
-pub mod stimuli;
+pub(crate) mod radiance_limit;
+pub(crate) mod stimuli;
 pub mod sweep;
 
 pub use self::image::{compare, Comparison, Image};

@@ -41,17 +41,18 @@ use crate::tradeoff::{Factor, Stimulus, Surface as Seen};
 use std::f64::consts::PI;
 
 /// View angles of the fit set (degrees).
-pub const FIT_ANGLES: [f64; 11] = [
+pub(crate) const FIT_ANGLES: [f64; 11] = [
     0.0, 25.0, 40.0, 50.0, 58.0, 65.0, 71.0, 76.0, 81.0, 85.0, 89.5,
 ];
 /// View angles of the held-out set, between the fitted ones.
-pub const HELD_OUT_ANGLES: [f64; 10] = [12.0, 33.0, 45.0, 54.0, 61.5, 68.0, 73.5, 78.5, 83.0, 87.5];
+pub(crate) const HELD_OUT_ANGLES: [f64; 10] =
+    [12.0, 33.0, 45.0, 54.0, 61.5, 68.0, 73.5, 78.5, 83.0, 87.5];
 /// Thickness samples per cycle of a ramp's round-trip phase at the shortest wavelength.
-pub const SAMPLES_PER_CYCLE: f64 = 12.0;
+pub(crate) const SAMPLES_PER_CYCLE: f64 = 12.0;
 /// The same under a map's tinted spectra (its basis and texel mixtures): the film's fringes are
 /// sampled densely under the untinted light, and a smooth tint only weighs them; thinner, so
 /// that a map's dozen spectra do not multiply a ramp's thousand films.
-pub const TINTED_SAMPLES_PER_CYCLE: f64 = 4.0;
+pub(crate) const TINTED_SAMPLES_PER_CYCLE: f64 = 4.0;
 
 /// Angles around the sun's highlight (offsets in degrees from it): fitted, and held out.
 const HIGHLIGHT_FIT: [f64; 5] = [-3.0, -1.5, 0.0, 1.5, 3.0];
@@ -67,7 +68,7 @@ pub struct Sets<T> {
 }
 
 /// The scene's stimuli: fitted, and held out.
-pub type Stimuli = Sets<Stimulus>;
+pub(crate) type Stimuli = Sets<Stimulus>;
 
 /// Which of a lighting's maps the renderer reads for a path: the map seen behind the objects
 /// (the environment seen directly, a transparent object's transmission), the diffuse map, the

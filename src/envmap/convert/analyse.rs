@@ -29,7 +29,7 @@ pub struct Analysis {
 /// Analyses the map: its lights, then what RGB (1,1,1) is, then (for one light) the main light.
 /// Under the light premise the scene is analysed again in true colours. The map is looked at,
 /// never changed: what the premise does to it is the plan's (see [`super::plan`]).
-pub fn analyse(input: &Input, opts: &ConvertOptions) -> Result<Analysis> {
+pub(crate) fn analyse(input: &Input, opts: &ConvertOptions) -> Result<Analysis> {
     let space = input.space.space;
     let settings = SceneSettings {
         sun: opts.sun,

@@ -31,7 +31,7 @@ use nalgebra::{Matrix3, Vector3};
 
 /// The degrees of the Bernstein polynomials of the non-negative fallback: nine bumps over the
 /// range, then 25 narrower ones (single bands come last).
-pub const BERNSTEIN_DEGREES: [usize; 2] = [8, 24];
+pub(crate) const BERNSTEIN_DEGREES: [usize; 2] = [8, 24];
 
 /// Integrates spectra on the output grid to luminance and (true, D65-referenced) RGB.
 #[derive(Debug, Clone)]
@@ -512,7 +512,7 @@ fn sun_spd(
 
 /// Non-negative least squares, min |G b - t| over b >= 0, for the three rows of `g`'s columns
 /// (Lawson and Hanson 1974, active set). Returns b and the residual's norm.
-pub fn nnls(g: &[Vector3<f64>], t: &Vector3<f64>) -> (Vec<f64>, f64) {
+pub(crate) fn nnls(g: &[Vector3<f64>], t: &Vector3<f64>) -> (Vec<f64>, f64) {
     let n = g.len();
     let mut x = vec![0.0; n];
     let mut passive = vec![false; n];
@@ -578,7 +578,7 @@ fn passive_lstsq(g: &[Vector3<f64>], passive: &[bool], t: &Vector3<f64>) -> Vec<
 }
 
 /// Whether a written spectrum goes below zero (beyond rounding).
-pub fn is_negative(out: &[f32]) -> bool {
+pub(crate) fn is_negative(out: &[f32]) -> bool {
     let (lo, hi) = out
         .iter()
         .fold((0f32, 0f32), |(lo, hi), &v| (lo.min(v), hi.max(v)));

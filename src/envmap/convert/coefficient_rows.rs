@@ -12,7 +12,7 @@ use rayon::prelude::*;
 /// per extra channel (the channels after the bands: R, G, B and the sun mask, or a basis
 /// format's coefficients).
 #[derive(Debug, Clone)]
-pub struct SpectralRows {
+pub(crate) struct SpectralRows {
     width: usize,
     /// spectra[k][band]
     spectra: Vec<Vec<f32>>,
@@ -27,7 +27,7 @@ pub struct SpectralRows {
 }
 
 /// One row being filled (see [`SpectralRows::rows_mut`]).
-pub struct RowMut<'a> {
+pub(crate) struct RowMut<'a> {
     width: usize,
     coefficients: &'a mut [f32],
     extra: &'a mut [f32],
@@ -36,7 +36,7 @@ pub struct RowMut<'a> {
 
 impl RowMut<'_> {
     /// Pixel `x`'s spectrum.
-    pub fn set(&mut self, x: usize, c: &Combination) {
+    pub(crate) fn set(&mut self, x: usize, c: &Combination) {
         for j in 0..c.count {
             self.coefficients[(c.first + j) * self.width + x] = c.weights[j];
             *self.used |= 1 << (c.first + j);
@@ -44,7 +44,7 @@ impl RowMut<'_> {
     }
 
     /// Pixel `x`'s value of extra channel `e`.
-    pub fn set_extra(&mut self, e: usize, x: usize, v: f32) {
+    pub(crate) fn set_extra(&mut self, e: usize, x: usize, v: f32) {
         self.extra[e * self.width + x] = v;
     }
 }
@@ -52,7 +52,7 @@ impl RowMut<'_> {
 impl SpectralRows {
     /// Room for `rows` rows of `width` pixels: `bands` channels made of the `spectra` (each
     /// `bands` long; none when `bands` is 0), then `extras` channels set directly.
-    pub fn new(
+    pub(crate) fn new(
         spectra: Vec<Vec<f32>>,
         bands: usize,
         extras: usize,
@@ -82,7 +82,10 @@ impl SpectralRows {
     }
 
     /// The first `rows` rows, cleared, to fill in parallel.
-    pub fn rows_mut(&mut self, rows: usize) -> impl IndexedParallelIterator<Item = RowMut<'_>> {
+    pub(crate) fn rows_mut(
+        &mut self,
+        rows: usize,
+    ) -> impl IndexedParallelIterator<Item = RowMut<'_>> {
         let width = self.width;
         let (k, e) = self.strides();
         self.coefficients[..rows * k]
@@ -140,7 +143,7 @@ impl LineSource for SpectralRows {
 /// fills image row `y` and returns what it measured; `write(y0, rows, batch)` writes rows
 /// `y0..y0 + rows` held in `batch`. Two batches of `batch` rows are in memory. Returns what each
 /// row measured, in row order.
-pub fn stream<S: Send>(
+pub(crate) fn stream<S: Send>(
     buffers: &mut [SpectralRows; 2],
     height: usize,
     batch: usize,

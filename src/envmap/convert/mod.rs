@@ -25,22 +25,22 @@
 //! # Ok::<(), specmap::Error>(())
 //! ```
 
-pub mod analyse;
+pub(crate) mod analyse;
 pub mod basis_form;
-pub mod carrier_plan;
-pub mod carriers;
-pub mod coefficient_rows;
-pub mod file_plan;
-pub mod options;
-pub mod own_basis;
+pub(crate) mod carrier_plan;
+pub(crate) mod carriers;
+pub(crate) mod coefficient_rows;
+pub(crate) mod file_plan;
+pub(crate) mod options;
+pub(crate) mod own_basis;
 pub mod pixel_spectra;
-pub mod pixels;
-pub mod plan;
-pub mod planning;
+pub(crate) mod pixels;
+pub(crate) mod plan;
+pub(crate) mod planning;
 pub mod read;
-pub mod report;
-pub mod sun_report;
-pub mod write;
+pub(crate) mod report;
+pub(crate) mod sun_report;
+pub(crate) mod write;
 
 pub use options::{
     input_files, mode_name, ConvertOptions, LightSpec, Lights, Method, OutputFormat, SkySpd,

@@ -26,10 +26,10 @@ use crate::colorimetry::{Cmfs, Observer};
 use crate::error::{Error, Result};
 use crate::spectrum::{Interpolation, Tabulated, WavelengthGrid};
 use crate::tradeoff::sample;
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DMatrix;
 
 /// The most spectra a basis holds (the GPU renderer's limit: 8 groups of 4).
-pub const MAX_K: usize = 32;
+pub(crate) const MAX_K: usize = 32;
 
 /// The default share of the spectral energy a basis may discard. What `convert` writes spans a
 /// few tens of dimensions (per light: the ColorChecker basis and the smooth modulation; the
@@ -37,7 +37,7 @@ pub const MAX_K: usize = 32;
 /// envmaps/sunrise.exr; beyond them lie the few hundred pixels given a Bernstein or nearest
 /// spectrum, and rounding noise (a half-float map averaged into the renderer's texels: well
 /// under 1e-8).
-pub const DEFAULT_DISCARD: f64 = 1e-7;
+pub(crate) const DEFAULT_DISCARD: f64 = 1e-7;
 
 /// The second moments of a map's pixel spectra (see the module docs).
 #[derive(Debug, Clone)]
@@ -135,7 +135,7 @@ pub struct Projection {
 
 /// The colour-matching functions on a file's wavelengths: per band the luminance weight
 /// (specmap's convention, `Y = sum L ybar / sum ybar`) and the x, y, z integration weights.
-pub struct BandColour {
+pub(crate) struct BandColour {
     /// ybar on the file's wavelengths.
     pub ybar: Vec<f64>,
     /// The sum of `ybar` (the luminance scale's denominator).
@@ -146,7 +146,7 @@ pub struct BandColour {
 
 impl BandColour {
     /// The weights for the wavelengths `wl` (nm), the CIE 1931 observer sampled smoothly at them.
-    pub fn new(wl: &[f64]) -> Result<BandColour> {
+    pub(crate) fn new(wl: &[f64]) -> Result<BandColour> {
         let grid = WavelengthGrid::visible_1nm();
         let cmfs = Cmfs::new(Observer::Cie1931, &grid)?;
         let nm: Vec<f64> = grid.wavelengths_nm().collect();
@@ -172,7 +172,7 @@ impl BandColour {
     }
 
     /// Luminance of the spectrum `s` on the file's wavelengths.
-    pub fn luminance(&self, s: &[f64]) -> f64 {
+    pub(crate) fn luminance(&self, s: &[f64]) -> f64 {
         s.iter().zip(&self.ybar).map(|(a, b)| a * b).sum::<f64>() / self.ybar_sum
     }
 }
@@ -266,7 +266,7 @@ impl OwnBasis {
 }
 
 /// `|fit - s| / |s|` with `fit(i)` the fitted spectrum's band `i` (0 for a black spectrum).
-pub fn relative_residual(s: &[f64], fit: impl Fn(usize) -> f64) -> f64 {
+pub(crate) fn relative_residual(s: &[f64], fit: impl Fn(usize) -> f64) -> f64 {
     let (mut r2, mut s2) = (0.0, 0.0);
     for (i, v) in s.iter().enumerate() {
         r2 += (fit(i) - v).powi(2);
@@ -305,10 +305,11 @@ fn colour_keeping(b: &DMatrix<f64>, c: &DMatrix<f64>) -> (DMatrix<f64>, bool) {
 }
 
 /// The coefficients of `s` as a vector (a convenience for tests).
-pub fn coefficients(basis: &OwnBasis, s: &[f64]) -> DVector<f64> {
+#[cfg(test)]
+pub(crate) fn coefficients(basis: &OwnBasis, s: &[f64]) -> nalgebra::DVector<f64> {
     let mut out = vec![0.0; basis.len()];
     basis.project(s, &mut out);
-    DVector::from_vec(out)
+    nalgebra::DVector::from_vec(out)
 }
 
 #[cfg(test)]

@@ -61,7 +61,7 @@ pub struct Plan {
 
 /// Plans the write of `input` as analysed, to `output` (None: nothing will be written). The plan
 /// keeps the input: the map as it will be written.
-pub fn plan(
+pub(crate) fn plan(
     mut input: Input,
     analysis: &Analysis,
     opts: &ConvertOptions,

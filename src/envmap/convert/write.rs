@@ -119,7 +119,7 @@ pub struct WriteStats {
 
 /// Writes the planned file: the spectral form, or the basis form factored from a spectral
 /// intermediate (written as float beside the output, read twice, removed).
-pub fn write(
+pub(crate) fn write(
     plan: &Plan,
     cells: &Cells,
     progress: &(dyn Fn(usize, usize) + Sync),

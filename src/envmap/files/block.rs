@@ -22,7 +22,7 @@ pub trait LineSource: Sync {
 }
 
 /// Rows of pixels with `per_pixel` interleaved values each (the caller's order).
-pub struct Interleaved<'a> {
+pub(crate) struct Interleaved<'a> {
     /// The rows' values, row-major from the source's first row, `per_pixel` per pixel.
     pub rows: &'a [f32],
     /// Row length in pixels.
@@ -43,7 +43,7 @@ impl LineSource for Interleaved<'_> {
 }
 
 /// What every block of a file shares.
-pub struct BlockFormat<'a> {
+pub(crate) struct BlockFormat<'a> {
     /// The file being written (named in errors).
     pub dest: &'a Path,
     /// Image width in pixels.
@@ -67,10 +67,10 @@ pub struct BlockFormat<'a> {
 }
 
 /// A compressed block and its index in increasing-y order.
-pub type Encoded = (usize, Chunk);
+pub(crate) type Encoded = (usize, Chunk);
 
 /// Per-thread scratch: the compressor, one scan line as f32 and as half, the block's bytes.
-pub struct BlockEncoder {
+pub(crate) struct BlockEncoder {
     zip: ZipEncoder,
     line: Vec<f32>,
     halves: Vec<f16>,
@@ -79,7 +79,7 @@ pub struct BlockEncoder {
 
 impl BlockEncoder {
     /// Empty scratch and a ZIP compressor at `zip_level`.
-    pub fn new(zip_level: u8) -> BlockEncoder {
+    pub(crate) fn new(zip_level: u8) -> BlockEncoder {
         BlockEncoder {
             zip: ZipEncoder::new(zip_level),
             line: Vec::new(),
@@ -91,7 +91,7 @@ impl BlockEncoder {
     /// Encodes rows `row0..row0 + lines` of `src` as the block that starts at image row
     /// `block_y`. Fails on a value that is not finite or, after the scale, beyond the sample
     /// type's range, naming the pixel, channel and value.
-    pub fn encode(
+    pub(crate) fn encode(
         &mut self,
         f: &BlockFormat,
         src: &dyn LineSource,
@@ -277,7 +277,7 @@ fn check_line(f: &BlockFormat, line: &[f32], y: usize, channel: usize) -> Result
 }
 
 /// The error for a value the file cannot hold.
-pub fn value_error(f: &BlockFormat, v: f32, x: usize, y: usize, channel: usize) -> Error {
+pub(crate) fn value_error(f: &BlockFormat, v: f32, x: usize, y: usize, channel: usize) -> Error {
     let why = if !v.is_finite() {
         "is not finite".to_string()
     } else if f.half {

@@ -11,15 +11,15 @@
 //! - [`block`], [`zip`]: one scan-line block encoded and compressed (ZIP on libdeflate);
 //! - [`spectral_reader`]: reading a spectral file back (header, rows, one stored channel).
 
-pub mod attributes;
-pub mod block;
+pub(crate) mod attributes;
+pub(crate) mod block;
 mod decode;
 mod errors;
-pub mod faces;
-pub mod layout;
-pub mod rgb;
-pub mod spectral_reader;
-pub mod spectral_writer;
+pub(crate) mod faces;
+pub(crate) mod layout;
+pub(crate) mod rgb;
+pub(crate) mod spectral_reader;
+pub(crate) mod spectral_writer;
 mod write_header;
 pub mod zip;
 

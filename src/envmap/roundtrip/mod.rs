@@ -2,7 +2,7 @@
 //! with the file's own R, G, B preview (the original pixels), pixel by pixel, streaming.
 
 pub mod heatmap;
-pub mod metric;
+pub(crate) mod metric;
 pub mod stats;
 
 use crate::colorimetry::{Chromaticities, Observer, RgbSpace};

@@ -12,7 +12,7 @@ use std::f64::consts::PI;
 
 /// The widest lat-long analysed at its own resolution (wider maps are analysed at this width:
 /// every light still covers whole cells, and the analysis stays in a few tens of MB).
-pub const MAX_ANALYSIS_WIDTH: usize = 2048;
+pub(crate) const MAX_ANALYSIS_WIDTH: usize = 2048;
 
 /// The lat-long cells of a map, in true linear RGB.
 #[derive(Debug, Clone)]
@@ -182,7 +182,7 @@ impl Cells {
 }
 
 /// The solid-angle-weighted quantile `q` (0..1) of `values` over the cells.
-pub fn weighted_quantile(cells: &Cells, values: &[f32], q: f64) -> f64 {
+pub(crate) fn weighted_quantile(cells: &Cells, values: &[f32], q: f64) -> f64 {
     // Cells of a row share their solid angle: sort (value, row) pairs once.
     let mut v: Vec<(f32, f64)> = values
         .iter()

@@ -39,56 +39,56 @@ use crate::error::Result;
 use nalgebra::Vector3;
 
 /// The sun's peak is at least this many times the map's median luminance.
-pub const SUN_CONTRAST: f64 = 100.0;
+pub(crate) const SUN_CONTRAST: f64 = 100.0;
 /// Lowest elevation of the sun's direction (degrees; just below 0, for a sun on the horizon).
-pub const SUN_MIN_ELEVATION_DEG: f64 = -1.0;
+pub(crate) const SUN_MIN_ELEVATION_DEG: f64 = -1.0;
 /// The sun's colour lies at most this far from the Planckian locus (|Duv|, CIE 1960 uv).
-pub const SUN_MAX_DUV: f64 = 0.02;
+pub(crate) const SUN_MAX_DUV: f64 = 0.02;
 /// No other emitter's peak (the sun's reflections aside) reaches this fraction of the sun's.
-pub const SUN_UNIQUE: f64 = 0.1;
+pub(crate) const SUN_UNIQUE: f64 = 0.1;
 /// A bright daylight-coloured emitter is a window or sky from this CCT up (K).
-pub const WINDOW_MIN_K: f64 = 5000.0;
+pub(crate) const WINDOW_MIN_K: f64 = 5000.0;
 /// A bright daylight-coloured emitter is a window or sky from this solid angle up (sr).
-pub const WINDOW_MIN_SR: f64 = 0.002;
+pub(crate) const WINDOW_MIN_SR: f64 = 0.002;
 /// A dim daylight-coloured region, or a bright patch above the horizon, is sky or a window from
 /// this CCT up (K).
-pub const SKY_MIN_K: f64 = 4000.0;
+pub(crate) const SKY_MIN_K: f64 = 4000.0;
 /// A dim daylight-coloured region is sky or a window from this solid angle up (sr).
-pub const SKY_MIN_SR: f64 = 0.02;
+pub(crate) const SKY_MIN_SR: f64 = 0.02;
 /// A colour within this CIE 1960 uv distance of a lamp's white, or of a mix of two lamps' or of a
 /// lamp's and a window's, is explained by them: a surface they light.
-pub const EXPLAINED_UV: f64 = 0.006;
+pub(crate) const EXPLAINED_UV: f64 = 0.006;
 /// A daylight-coloured region of a window's colour and this many times dimmer than it is a wall the
 /// window lights.
-pub const LIT_BY_WINDOW: f64 = 20.0;
+pub(crate) const LIT_BY_WINDOW: f64 = 20.0;
 /// A region reaching the zenith this much dimmer than the brightest lamp is a night sky even of a
 /// lamp's colour (moonlight: 1e-5 of a street lamp; a wall a lamp lights: 1e-2).
-pub const NIGHT_SKY_CONTRAST: f64 = 1e-3;
+pub(crate) const NIGHT_SKY_CONTRAST: f64 = 1e-3;
 /// A daylight region reaching this elevation (degrees above the horizon) is the sky, not a window.
-pub const SKY_TOP_DEG: f64 = 60.0;
+pub(crate) const SKY_TOP_DEG: f64 = 60.0;
 /// A daylight region covering this solid angle (sr) is the sky, however low.
-pub const SKY_LARGE_SR: f64 = 1.0;
+pub(crate) const SKY_LARGE_SR: f64 = 1.0;
 /// CIE 1960 uv distance within which a colour matches: a lamp's white (in daylight, an emitter
 /// farther from every white is a surface), or the sun's (below the horizon, a reflection of it).
-pub const LAMP_MATCH_UV: f64 = 0.01;
+pub(crate) const LAMP_MATCH_UV: f64 = 0.01;
 /// With daylight about, an emitter this many times brighter than the sky's and windows' bright
 /// parts is a lamp wherever it lies and whatever its colour.
-pub const DAYLIGHT_LAMP_CONTRAST: f64 = 10.0;
+pub(crate) const DAYLIGHT_LAMP_CONTRAST: f64 = 10.0;
 /// An emitter candidate this much dimmer than a lamp, and near its colour, is a surface it lights.
-pub const LIT_BY_LAMP: f64 = 0.05;
+pub(crate) const LIT_BY_LAMP: f64 = 0.05;
 /// CIE 1960 uv distance from a lamp's colour within which a far dimmer emitter ([`LIT_BY_LAMP`]) is
 /// a surface it lights.
-pub const LIT_COLOUR_UV: f64 = 0.05;
+pub(crate) const LIT_COLOUR_UV: f64 = 0.05;
 /// A lamp's pixels are those at least this fraction of its peak luminance.
-pub const LAMP_CORE: f64 = 0.25;
+pub(crate) const LAMP_CORE: f64 = 0.25;
 /// Emitters holding less of the energy than this are left to the reflectors (glints, noise).
-pub const MIN_LIGHT_SHARE: f64 = 1e-4;
+pub(crate) const MIN_LIGHT_SHARE: f64 = 1e-4;
 /// At most this many emitters are classified (the most energetic).
-pub const MAX_EMITTERS: usize = 256;
+pub(crate) const MAX_EMITTERS: usize = 256;
 
 /// A colour and where it lies.
 #[derive(Debug, Clone, Copy)]
-pub struct Colour {
+pub(crate) struct Colour {
     /// XYZ with Y = 1.
     pub xyz: Vector3<f64>,
     /// CIE 1931 xy chromaticity.
@@ -103,7 +103,7 @@ pub struct Colour {
 
 impl Colour {
     /// Measures the colour `xyz` (any scale; scaled to Y = 1 where Y > 0).
-    pub fn of(xyz: Vector3<f64>) -> Result<Colour> {
+    pub(crate) fn of(xyz: Vector3<f64>) -> Result<Colour> {
         let xyz = if xyz[1] > 0.0 { xyz / xyz[1] } else { xyz };
         let x = Xyz::new(xyz[0], xyz[1], xyz[2]);
         let c = cct(x)?;
@@ -137,7 +137,7 @@ impl Colour {
 
 /// The lights found, and the bright regions that are not lights.
 #[derive(Debug, Clone, Default)]
-pub struct Classified {
+pub(crate) struct Classified {
     /// The lights: the sun first, then the sky, the windows and the lamps.
     pub lights: Vec<Light>,
     /// Bright regions that are not lights, each with why in words (first: why there is no sun).
@@ -152,7 +152,7 @@ struct Candidate {
 
 /// Classifies the emitters of a scene (brightest peak first) and finds its dim skies: the
 /// daylight first (windows, sky, the sun seen with them), then the lamps.
-pub fn classify(
+pub(crate) fn classify(
     cells: &Cells,
     levels: &Levels,
     emitters: Vec<Emitter>,

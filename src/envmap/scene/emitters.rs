@@ -78,14 +78,13 @@ impl Cells {
 
 /// A connected region of emitter candidates.
 #[derive(Debug, Clone)]
-pub struct Emitter {
+pub(crate) struct Emitter {
     /// Its cells (indices, sorted).
     pub cells: Vec<usize>,
     /// The region's measures: energy, solid angle, direction, colour, extent.
     pub stats: RegionStats,
-    /// The cells at least `CORE_FRACTION` (0.1) of its peak luminance: a sun's disc, a bulb.
-    pub core: Vec<usize>,
-    /// Solid angle of its core (sr).
+    /// Solid angle of its core, the cells at least `CORE_FRACTION` (0.1) of its peak luminance:
+    /// a sun's disc, a bulb (sr).
     pub core_solid_angle_sr: f64,
     /// Its colour as XYZ with Y = 1: of its core; where the core is clipped, of the rest of the
     /// region or of its halo (the unclipped glow around it).
@@ -97,7 +96,7 @@ pub struct Emitter {
 }
 
 /// The emitter candidates of the map, brightest peak first.
-pub fn find(cells: &Cells, levels: &Levels) -> Vec<Emitter> {
+pub(crate) fn find(cells: &Cells, levels: &Levels) -> Vec<Emitter> {
     let mask: Vec<bool> = cells
         .y
         .iter()
@@ -154,7 +153,6 @@ fn emitter(cells: &Cells, levels: &Levels, region: Vec<usize>) -> Emitter {
     Emitter {
         cells: region,
         stats,
-        core,
         core_solid_angle_sr,
         colour,
         colour_from_halo: from_halo,

@@ -63,7 +63,7 @@ impl Family {
 /// white LEDs light stages, not rooms). Measured lamps of spectra/light/ that are not listed here
 /// are left out on purpose: the truth scenes of tools/make_truth.py are lit by them, so a good
 /// score cannot come from recognising a table.
-pub const CATALOGUE: [(&str, Family, u8); 29] = [
+pub(crate) const CATALOGUE: [(&str, Family, u8); 29] = [
     ("FL1", Family::Fluorescent, 2),
     ("FL2", Family::Fluorescent, 2),
     ("FL3", Family::Fluorescent, 2),
@@ -97,30 +97,30 @@ pub const CATALOGUE: [(&str, Family, u8); 29] = [
 
 /// Below this a warm white on the locus near a sodium table is high-pressure sodium, the
 /// likelier lamp than a filament at a candle's temperature.
-pub const SODIUM_BELOW_K: f64 = 2400.0;
+pub(crate) const SODIUM_BELOW_K: f64 = 2400.0;
 
 /// The Planckian temperatures of the catalogue's filament (a candle's 1500 K to a halogen's
 /// 3600 K).
-pub const FILAMENT_K: (f64, f64) = (1500.0, 3600.0);
+pub(crate) const FILAMENT_K: (f64, f64) = (1500.0, 3600.0);
 
 /// The temperatures where a compact source on the locus is taken for a filament rather than its
 /// near twins: from a dimmed lamp's 2400 K to a halogen's 3600 K (below, high-pressure sodium
 /// shares the locus, and is the likelier street lamp).
-pub const FILAMENT_PREFERRED_K: (f64, f64) = (2400.0, 3600.0);
+pub(crate) const FILAMENT_PREFERRED_K: (f64, f64) = (2400.0, 3600.0);
 
 /// A lamp this near a table's white (CIE 1960 uv; about a just noticeable difference), and no
 /// other family's, is taken for that table whatever the rules below prefer.
-pub const SAME_WHITE_UV: f64 = 0.0015;
+pub(crate) const SAME_WHITE_UV: f64 = 0.0015;
 
 /// Matches within this uv distance of the nearest are alternatives the shape can choose among.
-pub const AMBIGUITY_UV: f64 = 0.003;
+pub(crate) const AMBIGUITY_UV: f64 = 0.003;
 
 /// How far (CIE 1960 uv) a strip's white may lie from a triphosphor table's for that table to
 /// be taken over a halophosphate one (`triphosphor_instead`): about 1000 K at 3500 K.
-pub const TRIPHOSPHOR_REACH_UV: f64 = 0.02;
+pub(crate) const TRIPHOSPHOR_REACH_UV: f64 = 0.02;
 
 /// A region this elongated (long axis over short) is a tube or a strip.
-pub const STRIP_ELONGATION: f64 = 3.0;
+pub(crate) const STRIP_ELONGATION: f64 = 3.0;
 
 /// One table's white.
 #[derive(Debug, Clone)]
@@ -160,7 +160,7 @@ fn entries() -> &'static [Entry] {
 }
 
 /// The uv of a black body at `kelvin` (CIE 1931, 360-830 nm at 1 nm).
-pub fn planckian_uv(kelvin: f64) -> [f64; 2] {
+pub(crate) fn planckian_uv(kelvin: f64) -> [f64; 2] {
     let grid = WavelengthGrid::new(360.0, 830.0, 1.0).expect("a valid grid");
     let cmfs = Cmfs::new(Observer::Cie1931, &grid).expect("built-in CMFs");
     let s = Spectrum::from_fn(grid, |w| planck(w, kelvin));
@@ -194,7 +194,7 @@ type Near = (String, Family, u8, f64);
 /// table. Otherwise, among the whites within [`AMBIGUITY_UV`] of the nearest, in order: a warm white below [`SODIUM_BELOW_K`] near a sodium table is sodium; a strip is the
 /// most common near fluorescent; a compact source between 2400 and 3600 K on the locus is a
 /// filament; a compact one near a white LED is the most common such LED; otherwise the nearest.
-pub fn match_lamp(uv: [f64; 2], cct_k: Option<f64>, elongation: f64) -> Result<LampMatch> {
+pub(crate) fn match_lamp(uv: [f64; 2], cct_k: Option<f64>, elongation: f64) -> Result<LampMatch> {
     let found = whites_by_distance(uv, cct_k);
     let best = found[0].3;
     let near: Vec<&Near> = found

@@ -13,14 +13,14 @@
 //!    sky or windows;
 //! 5. [`reflectors`]: the mix of lights that lights each remaining pixel.
 
-pub mod cells;
-pub mod classify;
-pub mod emitters;
-pub mod families;
+pub(crate) mod cells;
+pub(crate) mod classify;
+pub(crate) mod emitters;
+pub(crate) mod families;
 pub mod main_light;
 pub mod overlay;
 pub mod reflectors;
-pub mod regions;
+pub(crate) mod regions;
 pub mod sun;
 
 use crate::colorimetry::RgbSpace;

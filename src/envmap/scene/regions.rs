@@ -6,7 +6,7 @@ use nalgebra::Vector3;
 
 /// The connected components (8-neighbourhood, wrapping in longitude) of the cells where `mask`
 /// holds, each a list of cell indices; largest first.
-pub fn components(cells: &Cells, mask: &[bool]) -> Vec<Vec<usize>> {
+pub(crate) fn components(cells: &Cells, mask: &[bool]) -> Vec<Vec<usize>> {
     let mut seen = vec![false; mask.len()];
     let mut out = Vec::new();
     for start in 0..mask.len() {
@@ -34,7 +34,7 @@ pub fn components(cells: &Cells, mask: &[bool]) -> Vec<Vec<usize>> {
 
 /// What a region is made of, measured.
 #[derive(Debug, Clone)]
-pub struct RegionStats {
+pub(crate) struct RegionStats {
     /// Sum of luminance x solid angle.
     pub energy: f64,
     /// Solid angle of its cells (sr).
@@ -55,7 +55,7 @@ pub struct RegionStats {
 
 impl RegionStats {
     /// Measures the cells `region` of `cells`.
-    pub fn of(cells: &Cells, region: &[usize]) -> RegionStats {
+    pub(crate) fn of(cells: &Cells, region: &[usize]) -> RegionStats {
         let (mut energy, mut omega) = (0.0, 0.0);
         let mut dir = [0.0f64; 3];
         let mut geo = [0.0f64; 3];
@@ -99,7 +99,7 @@ impl RegionStats {
     }
 
     /// Elevation of the energy-weighted direction above the horizon (degrees).
-    pub fn elevation_deg(&self) -> f64 {
+    pub(crate) fn elevation_deg(&self) -> f64 {
         self.direction[1].clamp(-1.0, 1.0).asin().to_degrees()
     }
 }
