@@ -823,3 +823,33 @@ fn tiled_spectral_files_read_like_scan_lines() {
     assert!(seen.iter().all(|&s| s));
     assert_eq!((info.width, info.height), (w, h));
 }
+
+#[test]
+fn read_errors_have_kinds_a_caller_can_match() {
+    use specmap::Error;
+    let dir = tempfile::tempdir().unwrap();
+    let missing = dir.path().join("missing.exr");
+    assert!(matches!(
+        specmap::envmap::files::read_rgb(&missing, None),
+        Err(Error::Io { .. })
+    ));
+    let text = dir.path().join("text.exr");
+    std::fs::write(&text, "R,G,B\n1,2,3\n").unwrap();
+    assert!(matches!(
+        specmap::envmap::files::read_rgb(&text, None),
+        Err(Error::Parse { .. })
+    ));
+    let bytes = std::fs::read("envmaps/sunrise.exr").unwrap();
+    let cut = dir.path().join("cut.exr");
+    std::fs::write(&cut, &bytes[..bytes.len() / 2]).unwrap();
+    match specmap::envmap::files::read_rgb(&cut, None) {
+        Err(Error::Parse { file, message, .. }) => {
+            assert_eq!(file, cut);
+            assert!(
+                message.contains("truncated") || message.contains("corrupt"),
+                "{message}"
+            );
+        }
+        other => panic!("a truncated file is a Parse error, not {other:?}"),
+    }
+}
