@@ -106,7 +106,9 @@ cargo test --all-targets --quiet 2>&1 | tee target/cargo-test.log
 # Doc tests too (examples in the docs must compile and pass).
 cargo test --doc --quiet
 
-step "numbered examples (examples/0*.rs, built above: each runs once)"
+step "numbered examples (examples/0*.rs: built, and each run once)"
+# cargo test built them already; this puts each at target/debug/examples/NAME.
+cargo build --quiet --examples
 for example in examples/0*.rs; do
   name=$(basename "$example" .rs)
   echo "-- $name"
