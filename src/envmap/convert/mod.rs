@@ -42,12 +42,17 @@ pub(crate) mod report;
 pub(crate) mod sun_report;
 pub(crate) mod write;
 
+pub use analyse::Analysis;
+pub use file_plan::{FilePlan, Output, Precisions};
 pub use options::{
     input_files, mode_name, ConvertOptions, LightSpec, Lights, Method, OutputFormat, SkySpd,
     SunSpd, WhiteSpec, MAX_BANDS, MAX_INPUT,
 };
+pub use pixels::PixelPlan;
+pub use plan::Plan;
 pub use report::{ConvertReport, Inspection};
 pub use sun_report::{SunFound, SunReport};
+pub use write::{SpectraCount, WriteStats};
 
 use crate::data;
 use crate::error::{Error, Result};
