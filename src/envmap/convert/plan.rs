@@ -39,8 +39,8 @@ pub struct Plan {
     pub grid_choice: Option<GridChoice>,
     /// Spectral channels, or the basis form.
     pub format: OutputFormat,
-    /// The distinct light spectra pixels are carried by (faithful method), and how many mixes
-    /// of them the reflectors take.
+    /// The distinct light spectra pixels are carried by (the faithful method; the fit's light
+    /// in the paper's modes).
     pub carriers: Vec<String>,
     /// How many mixes of the carriers light the reflectors.
     pub mixes: usize,
@@ -50,8 +50,8 @@ pub struct Plan {
     pub file: FilePlan,
     /// The basis fit: the paper's weights and matrix for the main light.
     pub fit: Fit,
-    #[serde(skip)]
     /// How each pixel becomes a spectrum.
+    #[serde(skip)]
     pub pixels: PixelPlan,
     /// The map as it is written (out-of-gamut colours kept under the space premise) and what
     /// reading it found.
