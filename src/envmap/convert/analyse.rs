@@ -3,8 +3,8 @@
 
 use crate::colorimetry::{Observer, RgbSpace};
 use crate::data;
-use crate::envmap::convert::carriers::Colorimeter;
 use crate::envmap::convert::options::{ConvertOptions, LightSpec, Lights, Method, WhiteSpec};
+use crate::envmap::convert::pixel_spectra::Colorimeter;
 use crate::envmap::convert::pixel_spectra::WhitePremise;
 use crate::envmap::convert::read::Input;
 use crate::envmap::scene::main_light::{self, LightChoice, WhiteChoice};

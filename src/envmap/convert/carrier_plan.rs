@@ -3,8 +3,9 @@
 //! cell takes.
 
 use crate::data;
-use crate::envmap::convert::carriers::{Assign, Carrier, CarrierEngine, Colorimeter, SunSpec};
+use crate::envmap::convert::carriers::{Assign, Carrier, CarrierEngine, SunSpec};
 use crate::envmap::convert::options::{Lights, SkySpd};
+use crate::envmap::convert::pixel_spectra::Colorimeter;
 use crate::envmap::convert::pixel_spectra::{
     daylight_coloured, daylight_residual, WhitePremise, DAYLIGHT_RESIDUAL,
 };

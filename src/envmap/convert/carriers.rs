@@ -17,93 +17,20 @@
 //!    colour), otherwise the nearest such colour (in XYZ), counted and measured. Solved by
 //!    non-negative least squares ([`nnls`], Lawson and Hanson 1974).
 
-use crate::colorimetry::{Cmfs, Observer, RgbSpace, Xyz};
 use crate::data;
 use crate::envmap::convert::pixel_spectra::{
-    daylight_coloured, Basis3, Took, WhitePremise, NEGATIVE_TOLERANCE, SMOOTH_CENTRE_NM,
-    SMOOTH_HALF_WIDTH_NM,
+    daylight_coloured, Basis3, Colorimeter, Took, WhitePremise, NEGATIVE_TOLERANCE,
+    SMOOTH_CENTRE_NM, SMOOTH_HALF_WIDTH_NM,
 };
 use crate::envmap::roundtrip::metric::RgbMetric;
 use crate::error::{Error, Result};
 use crate::illuminant;
-use crate::spectrum::{Interpolation, Rule, Spectrum, Tabulated, WavelengthGrid};
+use crate::spectrum::{Interpolation, Spectrum, Tabulated};
 use nalgebra::{Matrix3, Vector3};
 
 /// The degrees of the Bernstein polynomials of the non-negative fallback: nine bumps over the
 /// range, then 25 narrower ones (single bands come last).
 pub(crate) const BERNSTEIN_DEGREES: [usize; 2] = [8, 24];
-
-/// Integrates spectra on the output grid to luminance and (true, D65-referenced) RGB.
-#[derive(Debug, Clone)]
-pub struct Colorimeter {
-    cmfs: Cmfs,
-    y_norm: f64,
-    rule: Rule,
-    space: RgbSpace,
-    grid: WavelengthGrid,
-}
-
-impl Colorimeter {
-    /// Integrates on `grid` with `observer`'s colour-matching functions and `rule`, in `space`.
-    pub fn new(
-        grid: WavelengthGrid,
-        observer: Observer,
-        rule: Rule,
-        space: RgbSpace,
-    ) -> Result<Self> {
-        let cmfs = Cmfs::new(observer, &grid)?;
-        let y_norm = cmfs.y.integrate(rule);
-        Ok(Colorimeter {
-            cmfs,
-            y_norm,
-            rule,
-            space,
-            grid,
-        })
-    }
-
-    /// The grid spectra are sampled on.
-    pub fn grid(&self) -> &WavelengthGrid {
-        &self.grid
-    }
-
-    /// Luminance of `s` (specmap's scale: `Y = sum(L ybar) / sum(ybar)`).
-    pub fn luminance(&self, s: &Spectrum) -> Result<f64> {
-        Ok(s.try_mul(&self.cmfs.y)?.integrate(self.rule) / self.y_norm)
-    }
-
-    /// Linear RGB of `s` in the space, Y = 1 for a spectrum of luminance 1.
-    pub fn rgb(&self, s: &Spectrum) -> Result<Vector3<f64>> {
-        let [x, y, z] = self.cmfs.integrate(s, self.rule)?;
-        let n = self.y_norm;
-        let xyz = Xyz::new(100.0 * x / n, 100.0 * y / n, 100.0 * z / n);
-        Ok(Vector3::from(self.space.rgb_from_xyz(xyz)))
-    }
-
-    /// Three spectra as a basis (None when they cannot carry every colour).
-    pub(crate) fn basis3(&self, spectra: [Spectrum; 3]) -> Result<Option<Basis3>> {
-        let mut y = [0.0; 3];
-        let mut rgb = Matrix3::zeros();
-        for j in 0..3 {
-            y[j] = self.luminance(&spectra[j])?;
-            rgb.set_column(j, &self.rgb(&spectra[j])?);
-        }
-        Ok(Basis3::new(spectra, y, rgb))
-    }
-
-    /// A light's table on the grid at luminance 1, or an error naming it when it has none.
-    pub fn light(&self, name: &str, t: &Tabulated) -> Result<Spectrum> {
-        let s = t.resample(&self.grid, Interpolation::LIGHT);
-        let y = self.luminance(&s)?;
-        if !(y.is_finite() && y > 0.0) {
-            return Err(Error::invalid(format!(
-                "the light {name} has no visible energy on the output grid {}",
-                self.grid
-            )));
-        }
-        Ok(s.scaled(1.0 / y))
-    }
-}
 
 /// A carrier spectrum with the bases of its modulations.
 #[derive(Debug, Clone)]
@@ -175,7 +102,7 @@ impl Carrier {
             spd.try_mul(&mcc[2])?,
         ])?;
         let spd32: Vec<f32> = spd.values().iter().map(|&v| v as f32).collect();
-        let to_xyz = c.space.to_xyz_matrix();
+        let to_xyz = c.space().to_xyz_matrix();
         let n = grid.len();
         let t = |i: usize| i as f64 / (n - 1).max(1) as f64;
         let mut nonneg = Vec::new();
@@ -300,12 +227,7 @@ impl CarrierEngine {
         premise: WhitePremise,
         balance: [f64; 3],
     ) -> Result<CarrierEngine> {
-        let daylight_basis = {
-            let [s0, s1, s2] = illuminant::daylight_components()?
-                .map(|t| t.resample(c.grid(), Interpolation::LIGHT));
-            let k = 1.0 / c.luminance(&s0)?;
-            c.basis3([s0.scaled(k), s1.scaled(k), s2.scaled(k)])?
-        };
+        let daylight_basis = c.daylight_basis()?;
         let sun = sun_spd(c, sun, daylight_basis.as_ref())?;
         Ok(CarrierEngine {
             carriers,
@@ -313,8 +235,8 @@ impl CarrierEngine {
             sun,
             premise,
             balance: Vector3::from(balance),
-            metric: RgbMetric::new(&c.space),
-            to_xyz: c.space.to_xyz_matrix(),
+            metric: RgbMetric::new(c.space()),
+            to_xyz: c.space().to_xyz_matrix(),
         })
     }
 
@@ -490,8 +412,8 @@ fn sun_spd(
                 sun: None,
                 premise: WhitePremise::Space,
                 balance: Vector3::repeat(1.0),
-                metric: RgbMetric::new(&c.space),
-                to_xyz: c.space.to_xyz_matrix(),
+                metric: RgbMetric::new(c.space()),
+                to_xyz: c.space().to_xyz_matrix(),
             };
             let w = engine.spectrum(
                 [rgb[0] as f32, rgb[1] as f32, rgb[2] as f32],
@@ -588,6 +510,8 @@ pub(crate) fn is_negative(out: &[f32]) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::colorimetry::{Observer, RgbSpace};
+    use crate::spectrum::Rule;
 
     fn colorimeter() -> Colorimeter {
         Colorimeter::new(

@@ -23,7 +23,7 @@
 //!
 //! Sun pixels get the sun's SPD at the luminance their own conversion would have had.
 
-use crate::colorimetry::{Cmfs, RgbSpace, Xyz};
+use crate::colorimetry::{Cmfs, Observer, RgbSpace, Xyz};
 use crate::envmap::roundtrip::metric::RgbMetric;
 #[cfg(test)]
 use crate::envmap::roundtrip::metric::ROUND_TRIP_ZERO;
@@ -299,14 +299,96 @@ pub enum Took {
     Fixed,
 }
 
-/// A spectrum on the output grid, RGB of it and its sun: what the engine's stages share.
-struct Measure {
-    grid: WavelengthGrid,
-    fit_grid: WavelengthGrid,
-    rule: Rule,
-    space: RgbSpace,
+/// Integrates spectra on the output grid to luminance and (true, D65-referenced) RGB.
+#[derive(Debug, Clone)]
+pub struct Colorimeter {
     cmfs: Cmfs,
     y_norm: f64,
+    rule: Rule,
+    space: RgbSpace,
+    grid: WavelengthGrid,
+}
+
+impl Colorimeter {
+    /// Integrates on `grid` with `observer`'s colour-matching functions and `rule`, in `space`.
+    pub fn new(
+        grid: WavelengthGrid,
+        observer: Observer,
+        rule: Rule,
+        space: RgbSpace,
+    ) -> Result<Self> {
+        let cmfs = Cmfs::new(observer, &grid)?;
+        let y_norm = cmfs.y.integrate(rule);
+        Ok(Colorimeter {
+            cmfs,
+            y_norm,
+            rule,
+            space,
+            grid,
+        })
+    }
+
+    /// The grid spectra are sampled on.
+    pub fn grid(&self) -> &WavelengthGrid {
+        &self.grid
+    }
+
+    /// The RGB space colours are given in.
+    pub fn space(&self) -> &RgbSpace {
+        &self.space
+    }
+
+    /// Luminance of `s` (specmap's scale: `Y = sum(L ybar) / sum(ybar)`).
+    pub fn luminance(&self, s: &Spectrum) -> Result<f64> {
+        Ok(s.try_mul(&self.cmfs.y)?.integrate(self.rule) / self.y_norm)
+    }
+
+    /// Linear RGB of `s` in the space, Y = 1 for a spectrum of luminance 1.
+    pub fn rgb(&self, s: &Spectrum) -> Result<Vector3<f64>> {
+        let [x, y, z] = self.cmfs.integrate(s, self.rule)?;
+        let n = self.y_norm;
+        let xyz = Xyz::new(100.0 * x / n, 100.0 * y / n, 100.0 * z / n);
+        Ok(Vector3::from(self.space.rgb_from_xyz(xyz)))
+    }
+
+    /// The CIE daylight components S0, S1, S2, scaled to Y ~ 1 each (S1 and S2 have little
+    /// luminance: their own scale would do).
+    pub(crate) fn daylight_basis(&self) -> Result<Option<Basis3>> {
+        let [s0, s1, s2] = illuminant::daylight_components()?
+            .map(|t| t.resample(&self.grid, Interpolation::LIGHT));
+        let k = 1.0 / self.luminance(&s0)?;
+        self.basis3([s0.scaled(k), s1.scaled(k), s2.scaled(k)])
+    }
+
+    /// Three spectra as a basis (None when they cannot carry every colour).
+    pub(crate) fn basis3(&self, spectra: [Spectrum; 3]) -> Result<Option<Basis3>> {
+        let mut y = [0.0; 3];
+        let mut rgb = Matrix3::zeros();
+        for j in 0..3 {
+            y[j] = self.luminance(&spectra[j])?;
+            rgb.set_column(j, &self.rgb(&spectra[j])?);
+        }
+        Ok(Basis3::new(spectra, y, rgb))
+    }
+
+    /// A light's table on the grid at luminance 1, or an error naming it when it has none.
+    pub fn light(&self, name: &str, t: &Tabulated) -> Result<Spectrum> {
+        let s = t.resample(&self.grid, Interpolation::LIGHT);
+        let y = self.luminance(&s)?;
+        if !(y.is_finite() && y > 0.0) {
+            return Err(Error::invalid(format!(
+                "the light {name} has no visible energy on the output grid {}",
+                self.grid
+            )));
+        }
+        Ok(s.scaled(1.0 / y))
+    }
+}
+
+/// The fit's spectra put on the output grid and measured there: what the engine's stages share.
+struct Measure {
+    c: Colorimeter,
+    fit_grid: WavelengthGrid,
 }
 
 /// The light's three basis spectra (f32), their luminances, and their RGB as columns.
@@ -317,44 +399,27 @@ type SunSpectrum = (Vec<f32>, Vector3<f64>);
 
 impl Measure {
     fn new(fit: &Fit, grid: WavelengthGrid, rule: Rule, space: RgbSpace) -> Result<Measure> {
-        let cmfs = Cmfs::new(fit.observer, &grid)?;
-        let y_norm = cmfs.y.integrate(rule);
         Ok(Measure {
-            grid,
+            c: Colorimeter::new(grid, fit.observer, rule, space)?,
             fit_grid: fit.grid,
-            rule,
-            space,
-            cmfs,
-            y_norm,
         })
     }
 
     /// Values on the fit's grid, resampled to the output grid.
     fn on_grid(&self, values: &[f64], interp: Interpolation) -> Result<Spectrum> {
         let w: Vec<f64> = self.fit_grid.wavelengths_nm().collect();
-        Ok(Tabulated::new(w, values.to_vec())?.resample(&self.grid, interp))
-    }
-
-    fn luminance(&self, s: &Spectrum) -> Result<f64> {
-        Ok(s.try_mul(&self.cmfs.y)?.integrate(self.rule) / self.y_norm)
-    }
-
-    fn rgb(&self, s: &Spectrum) -> Result<Vector3<f64>> {
-        let [x, y, z] = self.cmfs.integrate(s, self.rule)?;
-        let n = self.y_norm;
-        // XYZ with Y = luminance, on the 0..100 scale the colour spaces expect.
-        let xyz = Xyz::new(100.0 * x / n, 100.0 * y / n, 100.0 * z / n);
-        Ok(Vector3::from(self.space.rgb_from_xyz(xyz)))
+        Ok(Tabulated::new(w, values.to_vec())?.resample(self.c.grid(), interp))
     }
 
     /// The fit's main light on the output grid, at Y = 1.
     fn light(&self, fit: &Fit) -> Result<Spectrum> {
         let light = self.on_grid(&fit.light_spd, Interpolation::LIGHT)?;
-        let light_y = self.luminance(&light)?;
+        let light_y = self.c.luminance(&light)?;
         if !light_y.is_finite() || light_y <= 0.0 {
             return Err(Error::invalid(format!(
                 "the main light {} has no visible energy on the output grid {}",
-                fit.light, self.grid
+                fit.light,
+                self.c.grid()
             )));
         }
         Ok(light.scaled(1.0 / light_y))
@@ -369,36 +434,16 @@ impl Measure {
             let b = self
                 .on_grid(&fit.basis_reflectance[j], Interpolation::SMOOTH)?
                 .try_mul(light)?;
-            basis_y[j] = self.luminance(&b)?;
-            basis_rgb.set_column(j, &self.rgb(&b)?);
+            basis_y[j] = self.c.luminance(&b)?;
+            basis_rgb.set_column(j, &self.c.rgb(&b)?);
             basis[j] = b.values().iter().map(|&v| v as f32).collect();
         }
         Ok((basis, basis_y, basis_rgb))
     }
 
-    /// A set of three spectra as a Basis3 (None when they cannot carry every colour).
-    fn basis3(&self, spectra: [Spectrum; 3]) -> Result<Option<Basis3>> {
-        let mut y = [0.0; 3];
-        let mut rgb = Matrix3::zeros();
-        for j in 0..3 {
-            y[j] = self.luminance(&spectra[j])?;
-            rgb.set_column(j, &self.rgb(&spectra[j])?);
-        }
-        Ok(Basis3::new(spectra, y, rgb))
-    }
-
-    /// The CIE daylight components S0, S1, S2, scaled to Y ~ 1 each (S1 and S2 have little
-    /// luminance: their own scale would do).
-    fn daylight_basis(&self) -> Result<Option<Basis3>> {
-        let [s0, s1, s2] = illuminant::daylight_components()?
-            .map(|t| t.resample(&self.grid, Interpolation::LIGHT));
-        let k = 1.0 / self.luminance(&s0)?;
-        self.basis3([s0.scaled(k), s1.scaled(k), s2.scaled(k)])
-    }
-
     /// The light times 1, x and x^2 of the wavelength's offset from the smooth model's centre.
     fn smooth_basis(&self, light: &Spectrum) -> Result<Option<Basis3>> {
-        let grid = self.grid;
+        let grid = *self.c.grid();
         let x = |i: usize| (grid.wavelength_nm(i) - SMOOTH_CENTRE_NM) / SMOOTH_HALF_WIDTH_NM;
         let with = |p: i32| -> Result<Spectrum> {
             let v = (0..grid.len())
@@ -406,21 +451,21 @@ impl Measure {
                 .collect();
             Spectrum::new(grid, v)
         };
-        self.basis3([with(0)?, with(1)?, with(2)?])
+        self.c.basis3([with(0)?, with(1)?, with(2)?])
     }
 
     /// A sun given its SPD: on the output grid at Y = 1.
     fn sun_of_spd(&self, t: &Tabulated) -> Result<SunSpectrum> {
-        let s = t.resample(&self.grid, Interpolation::LIGHT);
-        let y = self.luminance(&s)?;
+        let s = t.resample(self.c.grid(), Interpolation::LIGHT);
+        let y = self.c.luminance(&s)?;
         if !y.is_finite() || y <= 0.0 {
             return Err(Error::invalid(format!(
                 "the sun's SPD has no visible energy on {}",
-                self.grid
+                self.c.grid()
             )));
         }
         let s = s.scaled(1.0 / y);
-        let rgb = self.rgb(&s)?;
+        let rgb = self.c.rgb(&s)?;
         Ok((s.values().iter().map(|&v| v as f32).collect(), rgb))
     }
 }
@@ -474,11 +519,11 @@ impl Engine {
         let space = fit.rgb_space();
         let m = Measure::new(fit, grid, rule, space)?;
         let light = m.light(fit)?;
-        let light_rgb = m.rgb(&light)?;
+        let light_rgb = m.c.rgb(&light)?;
         let (basis, basis_y, basis_rgb) = m.light_basis(fit, &light)?;
         let need_daylight = model.sky_daylight || matches!(sun_source, SunSource::DaylightFit(_));
         let daylight = if need_daylight {
-            m.daylight_basis()?
+            m.c.daylight_basis()?
         } else {
             None
         };
