@@ -283,13 +283,32 @@ impl Tabulated {
     /// # Ok::<(), specmap::Error>(())
     /// ```
     pub fn resample(&self, grid: &WavelengthGrid, method: Interpolation) -> Spectrum {
+        let wavelengths: Vec<f64> = grid.wavelengths_nm().collect();
+        Spectrum {
+            grid: *grid,
+            values: self.at(&wavelengths, method),
+        }
+    }
+
+    /// Values at any `wavelengths_nm` (in any order, uniform or not), as
+    /// [`Tabulated::resample`] gives them on a grid: interpolated between samples, the end
+    /// values held outside the table's range.
+    ///
+    /// ```
+    /// use specmap::spectrum::{Interpolation, Tabulated};
+    ///
+    /// let t = Tabulated::new(vec![400.0, 500.0, 600.0], vec![0.0, 1.0, 0.5])?;
+    /// assert_eq!(t.at(&[450.0, 700.0, 405.0], Interpolation::LIGHT), [0.5, 0.5, 0.05]);
+    /// # Ok::<(), specmap::Error>(())
+    /// ```
+    pub fn at(&self, wavelengths_nm: &[f64], method: Interpolation) -> Vec<f64> {
         let interp = Interpolant::build(self, method);
         let (lo, hi) = self.range_nm();
         let first = self.values[0];
         let last = self.values[self.values.len() - 1];
-        let values = grid
-            .wavelengths_nm()
-            .map(|w| {
+        wavelengths_nm
+            .iter()
+            .map(|&w| {
                 if w < lo {
                     first
                 } else if w > hi {
@@ -298,11 +317,7 @@ impl Tabulated {
                     interp.eval(&self.wavelengths_nm, &self.values, w)
                 }
             })
-            .collect();
-        Spectrum {
-            grid: *grid,
-            values,
-        }
+            .collect()
     }
 }
 

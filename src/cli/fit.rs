@@ -75,6 +75,23 @@ pub(crate) fn run(a: FitArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// One light in one mode, as values: `--json`'s report and the fit `-o` writes (the Python
+/// package's `fit`); no file is written.
+pub(crate) fn json(a: &FitArgs) -> anyhow::Result<(serde_json::Value, fit::Fit)> {
+    check_args(a)?;
+    let space = RgbSpace::from(a.space);
+    let mut fits = fit_all(a, space)?;
+    if fits.len() != 1 {
+        anyhow::bail!(
+            "one light and one mode at a time ({} asked for)",
+            fits.len()
+        );
+    }
+    let (f, rt) = fits.pop().expect("one light and one mode");
+    let pixel = a.rgb.as_deref().map(|v| pixel(&f, &space, v)).transpose()?;
+    Ok((fit_json(&f, &rt, pixel), f))
+}
+
 /// Three basis spectra, and three values for `--rgb`.
 fn check_args(a: &FitArgs) -> anyhow::Result<()> {
     if a.basis.len() != 3 {

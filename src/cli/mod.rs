@@ -3,20 +3,20 @@
 mod batch;
 mod bench;
 mod color;
-mod convert;
+pub(crate) mod convert;
 mod data;
 mod demo;
-mod fit;
+pub(crate) mod fit;
 mod guard;
-mod inspect;
-mod render;
-mod render_args;
-mod render_scene;
+pub(crate) mod inspect;
+pub(crate) mod render;
+pub(crate) mod render_args;
+pub(crate) mod render_scene;
 mod rendition;
 mod roundtrip;
 pub(crate) mod runtime_dir;
 mod sequence;
-mod thinfilm;
+pub(crate) mod thinfilm;
 mod tolerance;
 mod view;
 

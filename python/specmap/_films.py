@@ -1,0 +1,2 @@
+"""Thin films (being written)."""
+thinfilm = None

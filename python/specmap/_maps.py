@@ -1,0 +1,2 @@
+"""Environment maps (being written)."""
+inspect = convert = read_spectral = upsample = None

@@ -1,0 +1,2 @@
+"""The renderer (being written)."""
+render = None

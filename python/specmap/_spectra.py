@@ -1,0 +1,2 @@
+"""Spectra, colour and the paper's fit (being written)."""
+Spectrum = spectrum = xyz = fit = Fit = None
