@@ -727,9 +727,11 @@ impl<T: Real> Film<T> {
         (r, t)
     }
 
-    /// R and T of the whole stack, all layers coherent: [`Film::segment`] for s and p at once,
-    /// sharing each medium's `q` and phase factor (the hot path).
-    fn coherent_rt(&self, incidence: &Incidence, pol: Polarization) -> Rt<T> {
+    /// R and T of the whole stack, all layers coherent, every layer's thickness multiplied by
+    /// `scale` (1 for the film as built; `x * 1 = x` exactly, so the results are the same bits):
+    /// [`Film::segment`] for s and p at once, sharing each medium's `q` and phase factor (the hot
+    /// path).
+    fn coherent_rt(&self, incidence: &Incidence, pol: Polarization, scale: T) -> Rt<T> {
         if incidence.cos == 0.0 {
             return Rt {
                 r: T::one(),
@@ -758,7 +760,7 @@ impl<T: Real> Film<T> {
         );
         while j != 0 {
             let above = self.medium(j - 1, incidence, g);
-            let e1 = propagate(here.q, self.d_over_lambda[j]);
+            let e1 = propagate(here.q, self.d_over_lambda[j] * scale);
             let e2 = e1 * e1;
             if do_s {
                 let (ra, ta) = interface(Wave::S, &above, &here);
@@ -825,6 +827,31 @@ impl<T: Real> Film<T> {
         self.rt_mixed(incidence, pol, &[])
     }
 
+    /// R and T with every layer coherent (as [`Film::rt`]) and every layer's thickness
+    /// multiplied by `thickness_scale`, without building the scaled film: for sweeping a
+    /// design's thickness (a designer dragging it, a table of scale x angle x wavelength) from
+    /// one `Film` per wavelength. `rt_scaled(incidence, pol, 1)` is `rt(incidence, pol)`, bit for
+    /// bit.
+    ///
+    /// `thickness_scale` must be finite and `>= 0`, and the scaled layers within what
+    /// [`Film::new`] accepts (at most 1e20 wavelengths thick): this is not checked here (it is
+    /// the hot path); check once by building the film at the largest scale.
+    ///
+    /// ```
+    /// use specmap::thinfilm::{Film, Incidence, Index, Polarization};
+    ///
+    /// let (air, glass, mgf2) = (Index::real(1.0)?, Index::real(1.52)?, Index::real(1.38)?);
+    /// let thin = Film::<f64>::new(550.0, air, &[(mgf2, 50.0)], glass)?;
+    /// let thick = Film::<f64>::new(550.0, air, &[(mgf2, 100.0)], glass)?;
+    /// let at = Incidence::degrees(30.0)?;
+    /// let (a, b) = (thin.rt_scaled(&at, Polarization::S, 2.0), thick.rt(&at, Polarization::S));
+    /// assert!((a.r - b.r).abs() < 1e-15 && (a.t - b.t).abs() < 1e-15);
+    /// # Ok::<(), specmap::Error>(())
+    /// ```
+    pub fn rt_scaled(&self, incidence: &Incidence, pol: Polarization, thickness_scale: T) -> Rt<T> {
+        self.coherent_rt(incidence, pol, thickness_scale)
+    }
+
     /// R and T with the layers listed in `incoherent` (0-based, from the ambient side) treated
     /// incoherently: their internal reflections add in intensity, not in amplitude (tmm's
     /// `inc_tmm`). Out-of-range entries are ignored.
@@ -835,7 +862,7 @@ impl<T: Real> Film<T> {
         incoherent: &[usize],
     ) -> Rt<T> {
         if incoherent.is_empty() {
-            return self.coherent_rt(incidence, pol);
+            return self.coherent_rt(incidence, pol, T::one());
         }
         let waves = pol.waves();
         let mut sum = Rt {
@@ -1309,6 +1336,37 @@ mod tests {
             3.0 * worst[1] < worst[0] && 3.0 * sum[1] < sum[0],
             "{worst:?} {sum:?}"
         );
+    }
+
+    #[test]
+    fn rt_scaled_is_the_film_with_scaled_layers() {
+        // Two layers, one absorbing, on a metal: scaling every thickness by s in the evaluation
+        // is the film built with the thicknesses times s, for s and p and both, at 0 and 70
+        // degrees, including s = 0 (the bare substrate) and s = 1 (the film itself, bit for bit).
+        let (air, metal) = (idx(1.0, 0.0), idx(3.1, 3.3));
+        let layers = [(idx(1.38, 0.0), 95.0), (idx(2.0, 0.3), 60.0)];
+        let base = Film::<f64>::new(520.0, air, &layers, metal).unwrap();
+        for degrees in [0.0, 70.0] {
+            let at = Incidence::degrees(degrees).unwrap();
+            for pol in [Polarization::S, Polarization::P, Polarization::Unpolarized] {
+                assert_eq!(base.rt_scaled(&at, pol, 1.0), base.rt(&at, pol));
+                for s in [0.0, 0.37, 2.5] {
+                    let scaled: Vec<_> = layers.iter().map(|&(n, d)| (n, d * s)).collect();
+                    let want = Film::<f64>::new(520.0, air, &scaled, metal)
+                        .unwrap()
+                        .rt(&at, pol);
+                    let got = base.rt_scaled(&at, pol, s);
+                    assert!(
+                        (got.r - want.r).abs() < 1e-13 && (got.t - want.t).abs() < 1e-13,
+                        "{degrees} {pol} x{s}: {got:?} vs {want:?}"
+                    );
+                }
+            }
+            let bare = Film::<f64>::new(520.0, air, &[], metal).unwrap();
+            let zero = base.rt_scaled(&at, Polarization::Unpolarized, 0.0);
+            let want = bare.rt(&at, Polarization::Unpolarized);
+            assert!((zero.r - want.r).abs() < 1e-13, "{zero:?} vs {want:?}");
+        }
     }
 
     #[test]
