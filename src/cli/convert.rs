@@ -462,7 +462,7 @@ impl From<CompressionArg> for Compression {
 
 /// A guard that knows a conversion's inputs: the map (or its face files), the light CSVs and the
 /// `--fit` file.
-pub(super) fn input_guard(
+pub(crate) fn input_guard(
     input: &str,
     opts: &ConvertOptions,
     args: &ConvertOptionArgs,
@@ -479,8 +479,6 @@ pub(super) fn input_guard(
 
 /// `specmap convert`: check the flags and files, convert with a progress bar, report.
 pub(crate) fn run(a: ConvertArgs) -> anyhow::Result<()> {
-    let opts = a.options.to_options()?;
-    check_files(&a, &opts)?;
     let bar = (!a.quiet && std::io::stderr().is_terminal()).then(rows_bar);
     let progress = |done: usize, total: usize| {
         if let Some(b) = &bar {
@@ -492,8 +490,7 @@ pub(crate) fn run(a: ConvertArgs) -> anyhow::Result<()> {
             b.set_position(done as u64);
         }
     };
-    let report = convert::convert(&a.input, &a.output, &opts, &progress)
-        .with_context(|| format!("converting {}", a.input))?;
+    let report = report(&a, &progress)?;
     if let Some(b) = bar {
         b.finish_and_clear();
     }
@@ -503,6 +500,18 @@ pub(crate) fn run(a: ConvertArgs) -> anyhow::Result<()> {
         super::emit(&report_text(&report));
     }
     Ok(())
+}
+
+/// The flags read, the files checked, the map converted: the report `--json` prints (the
+/// Python package's `convert` with an output).
+pub(crate) fn report(
+    a: &ConvertArgs,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> anyhow::Result<ConvertReport> {
+    let opts = a.options.to_options()?;
+    check_files(a, &opts)?;
+    convert::convert(&a.input, &a.output, &opts, progress)
+        .with_context(|| format!("converting {}", a.input))
 }
 
 /// The inputs exist and are not the output, which is an OpenEXR file that can be written.

@@ -76,7 +76,8 @@ pub(crate) fn run(a: FitArgs) -> anyhow::Result<()> {
 }
 
 /// One light in one mode, as values: `--json`'s report and the fit `-o` writes (the Python
-/// package's `fit`); no file is written.
+/// package's `fit`, python/src/spectra.rs, which the binary does not call); no file is written.
+#[allow(dead_code)]
 pub(crate) fn json(a: &FitArgs) -> anyhow::Result<(serde_json::Value, fit::Fit)> {
     check_args(a)?;
     let space = RgbSpace::from(a.space);

@@ -6,7 +6,7 @@ use super::outln;
 use anyhow::Context;
 use clap::Args;
 use specmap::envmap::convert;
-use specmap::envmap::scene::overlay::write_overlay;
+use specmap::envmap::scene::overlay::{write_overlay, Overlay};
 use specmap::envmap::scene::ReflectorModel;
 use std::path::PathBuf;
 
@@ -31,6 +31,26 @@ pub(crate) struct InspectArgs {
 }
 
 pub(crate) fn run(a: InspectArgs) -> anyhow::Result<()> {
+    if a.json {
+        super::emit(&(serde_json::to_string_pretty(&json(&a)?)? + "\n"));
+        return Ok(());
+    }
+    let (inspection, _) = inspect(&a)?;
+    super::emit(&summary(&inspection, a.overlay.as_ref()));
+    Ok(())
+}
+
+/// What `--json` prints: the analysis and plan, and the overlay drawn if asked (the Python
+/// package's `inspect`).
+pub(crate) fn json(a: &InspectArgs) -> anyhow::Result<serde_json::Value> {
+    let (inspection, overlay) = inspect(a)?;
+    let mut v = serde_json::to_value(&inspection)?;
+    v["overlay"] = serde_json::to_value(&overlay)?;
+    Ok(v)
+}
+
+/// The files checked, the map inspected, the overlay drawn if asked.
+fn inspect(a: &InspectArgs) -> anyhow::Result<(convert::Inspection, Option<Overlay>)> {
     let opts = a.options.to_options()?;
     let mut guard = input_guard(&a.input, &opts, &a.options);
     if let Some(o) = &a.overlay {
@@ -49,14 +69,7 @@ pub(crate) fn run(a: InspectArgs) -> anyhow::Result<()> {
         Some(path) => Some(write_overlay(path, inspection.map(), &inspection.scene)?),
         None => None,
     };
-    if a.json {
-        let mut v = serde_json::to_value(&inspection)?;
-        v["overlay"] = serde_json::to_value(&overlay)?;
-        super::emit(&(serde_json::to_string_pretty(&v)? + "\n"));
-        return Ok(());
-    }
-    super::emit(&summary(&inspection, a.overlay.as_ref()));
-    Ok(())
+    Ok((inspection, overlay))
 }
 
 /// The analysis and plan in words.

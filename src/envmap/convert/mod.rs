@@ -40,6 +40,7 @@ pub(crate) mod planning;
 pub mod read;
 pub(crate) mod report;
 pub(crate) mod sun_report;
+pub mod upsample;
 pub(crate) mod write;
 
 pub use analyse::Analysis;
@@ -80,6 +81,78 @@ pub fn convert(
     let plan = plan::plan(read, &analysis, opts, Some(output))?;
     let written = write::write(&plan, &analysis.scene.cells, progress)?;
     Ok(ConvertReport::new(input, &analysis, &plan, written))
+}
+
+/// A converted map held in memory: every pixel's spectrum, RGB and sun mask.
+#[derive(Debug, Clone)]
+pub struct Spectra {
+    /// Pixels per row.
+    pub width: usize,
+    /// Rows.
+    pub height: usize,
+    /// The bands' wavelengths (nm).
+    pub wavelengths_nm: Vec<f64>,
+    /// Row by row, each pixel's bands, then its R, G, B and sun mask (1 on the sun's pixels):
+    /// `wavelengths_nm.len() + 4` values per pixel, the values a float spectral file holds.
+    pub data: Vec<f32>,
+}
+
+/// Converts `input` as [`convert`] does and keeps the spectra in memory, writing no file (the
+/// basis form, which is a file's, is refused).
+pub fn convert_in_memory(
+    input: &str,
+    opts: &ConvertOptions,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<(ConvertReport, Spectra)> {
+    let read = read::read(input, opts)?;
+    to_memory(input, read, opts, progress)
+}
+
+/// Converts an RGB image already in memory (its layout from `opts.in_layout` or its shape, its
+/// values in `opts.space`), as [`convert_in_memory`] converts a file; `name` names it in the
+/// report and in messages.
+pub fn convert_image(
+    name: &str,
+    image: crate::envmap::RgbImage,
+    opts: &ConvertOptions,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<(ConvertReport, Spectra)> {
+    let read = read::from_image(name, image, opts)?;
+    to_memory(name, read, opts, progress)
+}
+
+/// Analyse, plan and compute `read`'s spectra into memory.
+fn to_memory(
+    input: &str,
+    read: read::Input,
+    opts: &ConvertOptions,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<(ConvertReport, Spectra)> {
+    if opts.format == OutputFormat::Basis {
+        return Err(Error::invalid(
+            "the basis form is a file's (its spectra in the header): give an output path, or \
+             convert to spectra in memory",
+        ));
+    }
+    // Memory holds f32: no half-float EV scale to plan.
+    let opts = &ConvertOptions {
+        precision: crate::envmap::files::Precision::Float,
+        ..opts.clone()
+    };
+    let analysis = analyse::analyse(&read, opts)?;
+    let plan = plan::plan(read, &analysis, opts, None)?;
+    let (written, data) = write::in_memory(&plan, &analysis.scene.cells, progress)?;
+    let image = &plan.input.map.image;
+    let spectra = Spectra {
+        width: image.width,
+        height: image.height,
+        wavelengths_nm: plan.grid.wavelengths_nm().collect(),
+        data,
+    };
+    Ok((
+        ConvertReport::new(input, &analysis, &plan, written),
+        spectra,
+    ))
 }
 
 /// Checks what needs no input before any work: the output is not an input, a named sun SPD is

@@ -5,6 +5,7 @@ use crate::colorimetry::{Chromaticities, RgbSpace};
 use crate::envmap::convert::{ConvertOptions, MAX_INPUT};
 use crate::envmap::files::{self, EnvmapAttr};
 use crate::envmap::layout::{detect, EnvMap, Layout};
+use crate::envmap::RgbImage;
 use crate::error::{Error, Result};
 use std::path::Path;
 use std::time::Instant;
@@ -153,7 +154,33 @@ impl Input {
 /// Reads, sanitises and lays out `input` for `opts`.
 pub fn read(input: &str, opts: &ConvertOptions) -> Result<Input> {
     let t0 = Instant::now();
-    let (mut map, description, declared) = read_input(input, opts)?;
+    let (map, description, declared) = read_input(input, opts)?;
+    prepare(input, map, description, declared, opts, t0)
+}
+
+/// An RGB image already in memory (a Python array), named `name` in messages, as the conversion
+/// reads a file: its layout from `opts.in_layout` or its shape, its values in `opts.space`.
+pub fn from_image(name: &str, image: RgbImage, opts: &ConvertOptions) -> Result<Input> {
+    let t0 = Instant::now();
+    let layout = match opts.in_layout {
+        Some(l) => l,
+        None => detect(image.width, image.height, None)
+            .map_err(|e| Error::invalid(format!("{name}: {e}")))?,
+    };
+    let description = format!("an RGB array of {} x {} pixels", image.width, image.height);
+    let map = EnvMap::new(layout, image).map_err(|e| Error::invalid(format!("{name}: {e}")))?;
+    prepare(name, map, description, None, opts, t0)
+}
+
+/// The map as read: its space resolved, its values sanitised, laid out for the output.
+fn prepare(
+    input: &str,
+    mut map: EnvMap,
+    description: String,
+    declared: Option<Chromaticities>,
+    opts: &ConvertOptions,
+    t0: Instant,
+) -> Result<Input> {
     let space = SpaceChoice::resolve(input, declared, opts)?;
     let (sanitized, out_of_gamut) = sanitize(&mut map, opts.strict, input, &space.space)?;
     let layout = map.layout;

@@ -8,6 +8,7 @@ use crate::envmap::convert::file_plan::{FilePlan, Output, Precisions};
 use crate::envmap::convert::pixel_spectra::{Engine, Took};
 use crate::envmap::convert::pixels::{PixelPlan, Pixels};
 use crate::envmap::convert::plan::Plan;
+use crate::envmap::files::block::LineSource;
 use crate::envmap::files::{
     spectral_channel_name, ChannelSet, EnvmapAttr, Precision, SpectralLayout, SpectralWriter,
 };
@@ -225,31 +226,37 @@ fn write_spectral(
         },
     )?;
     let t1 = Instant::now();
-    // Rows are computed, then written, a batch at a time: whole compression blocks, enough for
-    // the writer to compress them in parallel, within BATCH_BYTES.
     let lines = file.compression.lines_per_block();
-    let block_bytes = lines * width * per_pixel * std::mem::size_of::<f32>();
-    let blocks = (BATCH_BYTES / block_bytes.max(1)).clamp(1, height.div_ceil(lines));
-    let rows_per_block = (blocks * lines).max(16).min(height);
-    let px = Pixels {
-        map,
-        cells,
-        plan: &plan.pixels,
-        mode: plan.fit.mode,
-    };
-    let bands = plan.grid.len();
-    let tally = match &plan.pixels {
-        PixelPlan::Basis { engine, .. } => {
-            stream_planes(&px, engine, bands, &mut writer, rows_per_block, progress)?
-        }
-        PixelPlan::Carriers { .. } => {
-            stream_rows(&px, bands, &mut writer, rows_per_block, per_pixel, progress)?
-        }
-    };
+    let tally = stream_spectra(plan, cells, &mut writer, lines, progress)?;
     let seconds_encode = writer.encode_seconds();
     let bytes = writer.finish()?;
+    Ok(stats(per_pixel, bytes, tally, t1, seconds_encode))
+}
+
+/// The map's spectra computed as [`write`] writes them, kept in memory: the stats and every
+/// pixel's channels ([`channel_names`]: the bands, R, G, B, sun), row by row, as f32.
+pub(crate) fn in_memory(
+    plan: &Plan,
+    cells: &Cells,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<(WriteStats, Vec<f32>)> {
+    let map = &plan.input.map;
+    let per_pixel = channel_names(plan).len();
+    let mut sink = Memory {
+        width: map.image.width,
+        channels: per_pixel,
+        data: vec![0.0; map.image.width * map.image.height * per_pixel],
+    };
+    let t1 = Instant::now();
+    // Batches of 16 rows: what the writer's ZIP blocks hold (the values do not depend on it).
+    let tally = stream_spectra(plan, cells, &mut sink, 16, progress)?;
+    Ok((stats(per_pixel, 0, tally, t1, 0.0), sink.data))
+}
+
+/// The statistics of a write that counted `tally` and wrote `bytes`.
+fn stats(per_pixel: usize, bytes: u64, tally: Tally, t1: Instant, encode: f64) -> WriteStats {
     let floor = tally.all.floor();
-    Ok(WriteStats {
+    WriteStats {
         channels: per_pixel,
         bytes,
         spectra: tally.count,
@@ -260,8 +267,89 @@ fn write_spectral(
         basis: None,
         notes: Vec::new(),
         seconds: t1.elapsed().as_secs_f64(),
-        seconds_encode,
-    })
+        seconds_encode: encode,
+    }
+}
+
+/// Computes the map's spectra a batch of rows at a time (whole blocks of `lines` rows, enough
+/// for the writer to compress them in parallel, within [`BATCH_BYTES`]) into `sink`.
+fn stream_spectra(
+    plan: &Plan,
+    cells: &Cells,
+    sink: &mut dyn Sink,
+    lines: usize,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<Tally> {
+    let map = &plan.input.map;
+    let per_pixel = channel_names(plan).len();
+    let (width, height) = (map.image.width, map.image.height);
+    let block_bytes = lines * width * per_pixel * std::mem::size_of::<f32>();
+    let blocks = (BATCH_BYTES / block_bytes.max(1)).clamp(1, height.div_ceil(lines));
+    let rows_per_block = (blocks * lines).max(16).min(height);
+    let px = Pixels {
+        map,
+        cells,
+        plan: &plan.pixels,
+        mode: plan.fit.mode,
+    };
+    let bands = plan.grid.len();
+    match &plan.pixels {
+        PixelPlan::Basis { engine, .. } => {
+            stream_planes(&px, engine, bands, sink, rows_per_block, progress)
+        }
+        PixelPlan::Carriers { .. } => {
+            stream_rows(&px, bands, sink, rows_per_block, per_pixel, progress)
+        }
+    }
+}
+
+/// Where computed rows go: the OpenEXR writer, or memory.
+trait Sink: Send {
+    /// Rows from `y0`, each pixel's channels interleaved.
+    fn rows(&mut self, y0: usize, rows: &[f32]) -> Result<()>;
+    /// `count` rows from `y0`, a channel's scan line at a time from `src`.
+    fn lines(&mut self, y0: usize, count: usize, src: &dyn LineSource) -> Result<()>;
+}
+
+impl Sink for SpectralWriter {
+    fn rows(&mut self, y0: usize, rows: &[f32]) -> Result<()> {
+        self.write_rows(y0, rows)
+    }
+    fn lines(&mut self, y0: usize, count: usize, src: &dyn LineSource) -> Result<()> {
+        self.write_lines(y0, count, src)
+    }
+}
+
+/// The whole image in memory, each pixel's channels interleaved.
+struct Memory {
+    width: usize,
+    channels: usize,
+    data: Vec<f32>,
+}
+
+impl Sink for Memory {
+    fn rows(&mut self, y0: usize, rows: &[f32]) -> Result<()> {
+        let start = y0 * self.width * self.channels;
+        self.data[start..start + rows.len()].copy_from_slice(rows);
+        Ok(())
+    }
+    fn lines(&mut self, y0: usize, count: usize, src: &dyn LineSource) -> Result<()> {
+        let (width, channels) = (self.width, self.channels);
+        let start = y0 * width * channels;
+        self.data[start..start + count * width * channels]
+            .par_chunks_mut(width * channels)
+            .enumerate()
+            .for_each(|(r, row)| {
+                let mut line = vec![0f32; width];
+                for c in 0..channels {
+                    src.line(c, r, &mut line);
+                    for (x, &v) in line.iter().enumerate() {
+                        row[x * channels + c] = v;
+                    }
+                }
+            });
+        Ok(())
+    }
 }
 
 /// The rows written pixel-interleaved, a batch at a time (the faithful method: each pixel's
@@ -269,7 +357,7 @@ fn write_spectral(
 fn stream_rows(
     px: &Pixels,
     bands: usize,
-    writer: &mut SpectralWriter,
+    writer: &mut dyn Sink,
     rows_per_block: usize,
     per_pixel: usize,
     progress: &(dyn Fn(usize, usize) + Sync),
@@ -293,7 +381,7 @@ fn stream_rows(
                 a
             });
         tally.merge(&batch);
-        writer.write_rows(y0, buf)?;
+        writer.rows(y0, buf)?;
         y0 += rows;
         progress(y0, height);
     }
@@ -307,7 +395,7 @@ fn stream_planes(
     px: &Pixels,
     engine: &Engine,
     bands: usize,
-    writer: &mut SpectralWriter,
+    writer: &mut dyn Sink,
     rows_per_block: usize,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Tally> {
@@ -355,7 +443,7 @@ fn stream_planes(
         rows_per_block,
         &fill,
         &mut |y0, rows, batch| {
-            writer.write_lines(y0, rows, batch)?;
+            writer.lines(y0, rows, batch)?;
             progress(y0 + rows, height);
             Ok(())
         },
