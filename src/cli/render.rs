@@ -8,57 +8,62 @@ use super::sequence::{film_range, Sequence, SequenceReport};
 use anyhow::Context;
 use specmap::render::gpu::Gpu;
 use specmap::render::prepare::Prepared;
-use specmap::render::{cpu, env, sweep, Backend, Preset, Scene, Spectral};
+use specmap::render::{cpu, env, sweep, Backend, Image, Preset, Scene, Spectral};
 use std::path::PathBuf;
 use std::time::Instant;
 
 /// `specmap render`: the options and files checked, the scene, the backend and the quadrature;
-/// then the sweep, the sequence or the one image, and its report.
-pub(crate) fn run(mut a: RenderArgs) -> anyhow::Result<()> {
-    check_numbers(&a)?;
-    let preset = Preset::from(a.scene);
-    let size = a.image_size()?;
-    check_light(&a, preset)?;
+/// then the sweep, the sequence or the one image, written, and its report.
+pub(crate) fn run(a: RenderArgs) -> anyhow::Result<()> {
     let output = a
         .output
         .clone()
-        .unwrap_or_else(|| PathBuf::from(format!("render-{}.png", preset.name())));
-    let sequence = take_sequence(&mut a)?;
-    check_files(&a, sequence.as_ref(), &output)?;
-    let (lighting, env_report) = load_env(&a)?.unzip();
-    let scene = scene_from(&a, preset, size, lighting)?;
-    let spectral = spectral_of(&a)?;
-    let gpu = open_gpu(a.backend)?;
-    let job = Job {
-        a: &a,
-        preset,
-        size,
-        scene: &scene,
-        spectral: &spectral,
-        backend: if gpu.is_some() {
-            Backend::Gpu
-        } else {
-            Backend::Cpu
-        },
-        gpu: gpu.as_ref(),
-        output: &output,
-    };
-    let chosen = choose_quadrature(&job, sequence.as_ref())?;
-    if let Some(counts) = &a.sweep {
+        .unwrap_or_else(|| PathBuf::from(format!("render-{}.png", a.preset().name())));
+    let job = Job::new(a, Some(output.clone()))?;
+    let chosen = choose_quadrature(&job)?;
+    if let Some(counts) = &job.a.sweep {
         return run_sweep(&job, counts);
     }
-    if let Some(seq) = &sequence {
-        return render_sequence(&job, seq, chosen);
+    if let Some(seq) = &job.sequence {
+        return render_sequence(&job, seq, chosen, &output);
     }
-    let single = render_single(&job, chosen)?;
-    let report = match a.json {
-        true => {
-            serde_json::to_string_pretty(&single_json(&job, &single, env_report.as_ref()))? + "\n"
-        }
-        false => single_text(&job, &single, env_report.as_ref()),
+    let one = render_one(&job, chosen)?;
+    one.image
+        .write(&output, job.a.exposure)
+        .with_context(|| format!("writing {}", output.display()))?;
+    let report = match job.a.json {
+        true => serde_json::to_string_pretty(&one.json)? + "\n",
+        false => one.text + &format!("wrote {}\n", output.display()),
     };
     super::emit(&report);
     Ok(())
+}
+
+/// One image rendered, not written, and its report.
+pub(crate) struct Rendered {
+    /// Linear RGB, before the exposure (what an .exr output holds at `--exposure 0`).
+    pub(crate) image: Image,
+    /// What `--json` prints ("output" only where the image is to be written).
+    pub(crate) json: serde_json::Value,
+    /// What the report without `--json` says, up to its last line ("wrote OUT").
+    text: String,
+}
+
+/// The one image the options describe, rendered and reported but written nowhere (Python's
+/// `specmap.render`): the same stages as [`run`]'s one image. A sweep or a sequence (many
+/// images, written as files) is refused, as is `-o`.
+#[allow(dead_code)] // Called by python/src/render.rs, which compiles this module in.
+pub(crate) fn render_image(a: RenderArgs) -> anyhow::Result<Rendered> {
+    if let Some(o) = &a.output {
+        anyhow::bail!(
+            "output {}: the image is returned, not written (write it yourself, or run `specmap \
+             render -o`)",
+            o.display()
+        );
+    }
+    let job = Job::new(a, None)?;
+    let chosen = choose_quadrature(&job)?;
+    render_one(&job, chosen)
 }
 
 /// `--exposure` within 64 stops and `--repeats` at least 1.
@@ -100,7 +105,7 @@ fn take_sequence(a: &mut RenderArgs) -> anyhow::Result<Option<Sequence>> {
 fn check_files(
     a: &RenderArgs,
     sequence: Option<&Sequence>,
-    output: &std::path::Path,
+    output: Option<&std::path::Path>,
 ) -> anyhow::Result<()> {
     let mut guard = super::guard::Guard::new();
     if let Some(p) = &a.env {
@@ -118,15 +123,16 @@ fn check_files(
             }
         }
         (Some(_), None) => {}
-        (None, _) => match sequence {
-            Some(seq) => {
+        (None, _) => match (sequence, output) {
+            (Some(seq), Some(output)) => {
                 for k in 0..seq.frames() {
                     guard.output("-o", seq.file(output, k));
                 }
             }
-            None => {
+            (None, Some(output)) => {
                 guard.output("-o", output);
             }
+            (_, None) => {}
         },
     }
     guard.check()
@@ -151,43 +157,95 @@ fn open_gpu(backend: BackendArg) -> anyhow::Result<Option<Gpu>> {
 }
 
 /// What a render works with once the options are read.
-struct Job<'a> {
-    a: &'a RenderArgs,
+struct Job {
+    /// The options (a sequence's film at its ranges' starts; a turntable's without `--orbit`).
+    a: RenderArgs,
     preset: Preset,
     /// The image size, WxH.
     size: (usize, usize),
+    sequence: Option<Sequence>,
+    /// What loading `--env` found.
+    env_report: Option<env::EnvReport>,
     /// The scene as built (a sequence's frames orbit it or scale its films).
-    scene: &'a Scene,
-    spectral: &'a Spectral,
+    scene: Scene,
+    spectral: Spectral,
     backend: Backend,
-    gpu: Option<&'a Gpu>,
-    /// The image, or the pattern of a sequence's frames.
-    output: &'a std::path::Path,
+    gpu: Option<Gpu>,
+    /// The image, or the pattern of a sequence's frames; None where nothing is written.
+    output: Option<PathBuf>,
+}
+
+impl Job {
+    /// The options read and checked, in this order: the numbers, the size, the light, the
+    /// sequence, the files, the environment, the scene, the spectral settings, the GPU.
+    /// Without an `output` (nothing is written) a sweep or a sequence is refused.
+    fn new(mut a: RenderArgs, output: Option<PathBuf>) -> anyhow::Result<Job> {
+        check_numbers(&a)?;
+        let preset = Preset::from(a.scene);
+        let size = a.image_size()?;
+        check_light(&a, preset)?;
+        let sequence = take_sequence(&mut a)?;
+        if output.is_none() {
+            refuse_many(&a, sequence.as_ref())?;
+        }
+        check_files(&a, sequence.as_ref(), output.as_deref())?;
+        let (lighting, env_report) = load_env(&a)?.unzip();
+        let scene = scene_from(&a, preset, size, lighting)?;
+        let spectral = spectral_of(&a)?;
+        let gpu = open_gpu(a.backend)?;
+        Ok(Job {
+            preset,
+            size,
+            sequence,
+            env_report,
+            scene,
+            spectral,
+            backend: if gpu.is_some() {
+                Backend::Gpu
+            } else {
+                Backend::Cpu
+            },
+            gpu,
+            output,
+            a,
+        })
+    }
+}
+
+/// Where one image is returned: a sweep or a sequence (many, written as files) refused.
+fn refuse_many(a: &RenderArgs, sequence: Option<&Sequence>) -> anyhow::Result<()> {
+    let many = match (&a.sweep, sequence) {
+        (Some(_), _) => "--sweep measures many renders",
+        (None, Some(Sequence::Turntable { .. })) => "--turntable renders many frames",
+        (None, Some(Sequence::Thickness { .. })) => {
+            "a thickness range (--film N:A..B with --frames) renders many frames"
+        }
+        (None, None) => return Ok(()),
+    };
+    anyhow::bail!("{many}, written as files: run `specmap render` for it; one image is returned")
 }
 
 /// The quadrature, for every frame's scene and the view's range, and what choosing it measured
 /// (the first frame, on which a frame's cost is measured and, on the CPU, prepared once).
-fn choose_quadrature(
-    job: &Job,
-    sequence: Option<&Sequence>,
-) -> anyhow::Result<super::tolerance::Chosen> {
+fn choose_quadrature(job: &Job) -> anyhow::Result<super::tolerance::Chosen> {
+    let sequence = job.sequence.as_ref();
     let first = match sequence {
-        Some(seq) => seq.frame(job.scene, 0)?,
+        Some(seq) => seq.frame(&job.scene, 0)?,
         None => job.scene.clone(),
     };
     let serving = super::tolerance::Serving {
-        gpu: job.gpu,
+        gpu: job.gpu.as_ref(),
         frames: sequence.map_or(1, Sequence::frames),
         first: &first,
     };
     let mut fit_scene = match sequence {
-        Some(seq) => seq.fit_scene(job.scene),
+        Some(seq) => seq.fit_scene(&job.scene),
         None => job.scene.clone(),
     };
     if let Some(scales) = job.a.fit_range.as_deref().map(fit_range).transpose()? {
         fit_scene.for_any_view(scales);
     }
-    super::tolerance::quadrature_for(&fit_scene, job.spectral, job.a, &serving)
+    super::tolerance::quadrature_for(&fit_scene, &job.spectral, &job.a, &serving)
 }
 
 /// `--sweep`: colour error against time for each wavelength count (and the CPU's too when auto
@@ -196,13 +254,13 @@ fn run_sweep(job: &Job, counts: &[usize]) -> anyhow::Result<()> {
     if counts.is_empty() {
         anyhow::bail!("--sweep needs wavelength counts, e.g. 4,9,17,34,81,340");
     }
-    let (scene, spectral, repeats) = (job.scene, job.spectral, job.a.repeats);
+    let (scene, spectral, repeats) = (&job.scene, &job.spectral, job.a.repeats);
     let mut reports = vec![sweep::sweep(
         scene,
         spectral,
         counts,
         job.backend,
-        job.gpu,
+        job.gpu.as_ref(),
         repeats,
     )?];
     if job.backend == Backend::Gpu && job.a.backend == BackendArg::Auto {
@@ -259,14 +317,15 @@ fn render_sequence(
     job: &Job,
     seq: &Sequence,
     chosen: super::tolerance::Chosen,
+    output: &std::path::Path,
 ) -> anyhow::Result<()> {
     let t0 = Instant::now();
     let frames = seq.render(
-        (job.scene, chosen.prepared),
+        (&job.scene, chosen.prepared),
         &chosen.quadrature,
         job.spectral.space,
-        job.gpu,
-        (job.output, job.a.exposure),
+        job.gpu.as_ref(),
+        (output, job.a.exposure),
     )?;
     let report = SequenceReport {
         frames,
@@ -276,14 +335,14 @@ fn render_sequence(
         plan: chosen.plan.as_ref(),
     };
     report.emit(
-        job.scene,
+        &job.scene,
         job.a.json,
         job.backend,
-        job.gpu.map(|g| g.adapter()),
+        job.gpu.as_ref().map(|g| g.adapter()),
     )
 }
 
-/// One image rendered and written, with its timings.
+/// What rendering one image used and measured.
 struct Single {
     quadrature: specmap::quadrature::Quadrature,
     selection: Option<specmap::quadrature::choose::Selection>,
@@ -293,16 +352,16 @@ struct Single {
     gpu_timing: Option<specmap::render::gpu::GpuTiming>,
 }
 
-/// The one image: prepared (unless choosing the quadrature did), rendered, written.
-fn render_single(job: &Job, chosen: super::tolerance::Chosen) -> anyhow::Result<Single> {
+/// The one image: prepared (unless choosing the quadrature did), rendered, and reported.
+fn render_one(job: &Job, chosen: super::tolerance::Chosen) -> anyhow::Result<Rendered> {
     let t0 = Instant::now();
     let prepared = match chosen.prepared {
         Some(p) => p,
-        None => Prepared::with_quadrature(job.scene, &chosen.quadrature, job.spectral.space)?,
+        None => Prepared::with_quadrature(&job.scene, &chosen.quadrature, job.spectral.space)?,
     };
     let prepare_s = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
-    let (image, gpu_timing) = match job.gpu {
+    let (image, gpu_timing) = match &job.gpu {
         Some(g) => {
             let (i, t) = g.render(&prepared)?;
             (i, Some(t))
@@ -310,27 +369,29 @@ fn render_single(job: &Job, chosen: super::tolerance::Chosen) -> anyhow::Result<
         None => (cpu::render(&prepared), None),
     };
     let render_s = t1.elapsed().as_secs_f64();
-    image
-        .write(job.output, job.a.exposure)
-        .with_context(|| format!("writing {}", job.output.display()))?;
-    Ok(Single {
+    let single = Single {
         quadrature: chosen.quadrature,
         selection: chosen.selection,
         plan: chosen.plan,
         prepare_s,
         render_s,
         gpu_timing,
+    };
+    Ok(Rendered {
+        json: single_json(job, &single),
+        text: single_text(job, &single),
+        image,
     })
 }
 
-/// `--json` of the one image.
-fn single_json(job: &Job, s: &Single, env_report: Option<&env::EnvReport>) -> serde_json::Value {
+/// `--json` of the one image ("output" where it is to be written).
+fn single_json(job: &Job, s: &Single) -> serde_json::Value {
     let uniform = s.quadrature.uniform_grid();
-    serde_json::json!({
+    let mut json = serde_json::json!({
         "scene": job.preset.name(),
         "size": [job.size.0, job.size.1],
         "backend": job.backend,
-        "adapter": job.gpu.map(|g| g.adapter()),
+        "adapter": job.gpu.as_ref().map(|g| g.adapter()),
         "wavelengths": s.quadrature.len(),
         "range": uniform.map(|(g, _)| g.to_string()),
         "rule": uniform.map(|(_, r)| r),
@@ -338,17 +399,20 @@ fn single_json(job: &Job, s: &Single, env_report: Option<&env::EnvReport>) -> se
         "quadrature_choice": s.selection,
         "quadrature_plan": s.plan,
         "light": job.scene.lightings.iter().map(|l| l.label.clone()).collect::<Vec<_>>(),
-        "env": env_report,
+        "env": job.env_report,
         "prepare_s": s.prepare_s,
         "render_s": s.render_s,
         "gpu_timing": s.gpu_timing,
         "exposure_ev": job.a.exposure,
-        "output": job.output.display().to_string(),
-    })
+    });
+    if let Some(output) = &job.output {
+        json["output"] = output.display().to_string().into();
+    }
+    json
 }
 
-/// The report of the one image without `--json`.
-fn single_text(job: &Job, s: &Single, env_report: Option<&env::EnvReport>) -> String {
+/// The report of the one image without `--json`, up to "wrote OUT".
+fn single_text(job: &Job, s: &Single) -> String {
     let (w, h) = job.size;
     let mut out = String::new();
     outln!(
@@ -359,6 +423,7 @@ fn single_text(job: &Job, s: &Single, env_report: Option<&env::EnvReport>) -> St
         s.quadrature,
         job.backend,
         job.gpu
+            .as_ref()
             .map(|g| g.adapter())
             .map(|a| format!(" ({}, {})", a.name, a.backend))
             .unwrap_or_default()
@@ -369,7 +434,7 @@ fn single_text(job: &Job, s: &Single, env_report: Option<&env::EnvReport>) -> St
     if let Some(c) = &s.selection {
         super::tolerance::write_selection(&mut out, c);
     }
-    if let Some(r) = env_report {
+    if let Some(r) = &job.env_report {
         write_env_report(&mut out, r);
     }
     outln!(
@@ -382,7 +447,6 @@ fn single_text(job: &Job, s: &Single, env_report: Option<&env::EnvReport>) -> St
             .map(|t| format!(" (GPU compute {:.1} ms)", t.compute_s * 1e3))
             .unwrap_or_default()
     );
-    outln!(out, "wrote {}", job.output.display());
     out
 }
 
