@@ -5,7 +5,10 @@ a GPU adapter exists (Mesa's lavapipe will do), the GPU within the project's GPU
 of the CPU (tests/render.rs: mean CIEDE2000 below 0.5, max below 2)."""
 
 import os
+import subprocess
+import sys
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -130,6 +133,14 @@ def test_defaults_are_the_clis(cli, tmp_path):
     assert without(report, *TIMINGS) == without(cli_report, *TIMINGS, "output")
 
 
+def test_auto_chooses_the_backend_the_cli_chooses(cli, tmp_path):
+    options = {"size": "16x16", "step": 20}
+    _, report = specmap.render(**options)
+    _, cli_report = cli_render(cli, tmp_path, options)
+    assert report["backend"] == cli_report["backend"]
+    assert report["adapter"] == cli_report["adapter"]
+
+
 # --- errors ---------------------------------------------------------------------------------
 
 
@@ -202,10 +213,8 @@ def ciede2000(a, b):
         def lab(rgb):
             xyz = rgb.astype(np.float64) @ m.T / white
             f = np.where(xyz > (6 / 29) ** 3, np.cbrt(xyz), xyz / (3 * (6 / 29) ** 2) + 4 / 29)
-            return np.stack(
-                [116 * f[..., 1] - 16, 500 * (f[..., 0] - f[..., 1]), 200 * (f[..., 1] - f[..., 2])],
-                axis=-1,
-            )
+            x, y, z = f[..., 0], f[..., 1], f[..., 2]
+            return np.stack([116 * y - 16, 500 * (x - y), 200 * (y - z)], axis=-1)
 
         return colour.difference.delta_E_CIE2000(lab(a), lab(b))
 
@@ -224,3 +233,17 @@ def test_gpu_agrees_with_the_cpu(gpu_ready, env, sunrise):
     # The same wavelengths and report, but for the backend.
     same = without(report, *TIMINGS, "backend", "adapter")
     assert same == without(cpu_report, *TIMINGS, "backend", "adapter")
+
+
+def test_gpu_without_a_runtime_dir_is_quiet(gpu_ready):
+    # As the CLI's main does (cli::runtime_dir), a private XDG_RUNTIME_DIR keeps Mesa's Vulkan
+    # layer from printing "XDG_RUNTIME_DIR is invalid or not set" when it probes for Wayland.
+    env = {k: v for k, v in os.environ.items() if k != "XDG_RUNTIME_DIR"}
+    env["PYTHONPATH"] = os.pathsep.join(
+        [str(Path(specmap.__file__).parents[1]), env.get("PYTHONPATH", "")]
+    )
+    code = "import specmap; specmap.render(backend='gpu', size='4x4', step=100)"
+    run = subprocess.run(
+        [sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True
+    )
+    assert "XDG_RUNTIME_DIR" not in run.stderr, run.stderr
