@@ -98,8 +98,8 @@ step "no function over 80 lines without a reason, no import circle (tools/)"
 python3 tools/long_functions.py --check src
 python3 tools/import_circles.py --check
 
-step "cargo clippy --all-targets -D warnings"
-cargo clippy --all-targets --quiet -- -D warnings
+step "cargo clippy --workspace --all-targets -D warnings (the crate and python/)"
+cargo clippy --workspace --all-targets --quiet -- -D warnings
 
 step "cargo test (unit + integration)"
 cargo test --all-targets --quiet 2>&1 | tee target/cargo-test.log
@@ -123,4 +123,14 @@ export SPECMAP_WRITE_SPECTRAL="$PWD/target/debug/examples/write_spectral"
 # The slowest cases are listed at the end, to keep the suite's time in view.
 SPECMAP_BIN="$PWD/target/debug/specmap" .venv/bin/python -m pytest tests/interop -q \
   -p no:cacheprovider --durations=12
+
+step "the Python package (python/: built by maturin into .venv, then its pytest suite)"
+# Built as a user's `pip install ./python` builds it, but in the dev profile: it shares the
+# crate and the dependencies cargo test compiled above (target/debug), so it only compiles the
+# bindings. --no-build-isolation uses the maturin pinned in tests/interop/requirements.txt.
+PATH="$PWD/.venv/bin:$PATH" MATURIN_PEP517_ARGS="--profile dev" \
+  .venv/bin/pip install --quiet --disable-pip-version-check --no-build-isolation --no-deps \
+  --force-reinstall ./python
+SPECMAP_BIN="$PWD/target/debug/specmap" .venv/bin/python -m pytest python/tests -q \
+  -p no:cacheprovider --durations=8
 echo "the suite took ${SECONDS} s"
