@@ -584,6 +584,144 @@ fn flux<T: Real>(wave: Wave, m: &Medium<T>) -> T {
     }
 }
 
+/// The s and p amplitude coefficients `(r, t)` of one interface (zeros for a wave not asked).
+type Pair<T> = [(Complex<T>, Complex<T>); 2];
+
+/// The s and p Fresnel coefficients from `a` into `b`, each only where asked.
+#[inline]
+fn interfaces<T: Real>(do_s: bool, do_p: bool, a: &Medium<T>, b: &Medium<T>) -> Pair<T> {
+    let zero = Complex::new(T::zero(), T::zero());
+    [
+        if do_s {
+            interface(Wave::S, a, b)
+        } else {
+            (zero, zero)
+        },
+        if do_p {
+            interface(Wave::P, a, b)
+        } else {
+            (zero, zero)
+        },
+    ]
+}
+
+/// One step up the Airy recursion: a layer's `q` and `d / lambda`, and the interface from the
+/// medium above it into it.
+#[derive(Debug, Clone, Copy)]
+struct Step<T> {
+    q: Complex<T>,
+    d_over_lambda: T,
+    above: Pair<T>,
+}
+
+/// The stack's s and p amplitudes `(r, t)`: the bottom interface's, folded up through `steps`
+/// (from the substrate side) with every thickness times `scale`; the arithmetic of
+/// [`Film::coherent_rt`]'s loop, operation for operation, on a [`Sweep`]'s stored steps.
+#[inline(always)]
+fn airy<T: Real>(
+    do_s: bool,
+    do_p: bool,
+    bottom: Pair<T>,
+    steps: impl Iterator<Item = Step<T>>,
+    scale: T,
+) -> Pair<T> {
+    let one = Complex::new(T::one(), T::zero());
+    let [(mut rs, mut ts), (mut rp, mut tp)] = bottom;
+    for step in steps {
+        let e1 = propagate(step.q, step.d_over_lambda * scale);
+        let e2 = e1 * e1;
+        if do_s {
+            let (ra, ta) = step.above[0];
+            let x = rs * e2;
+            let den = one + ra * x;
+            rs = (ra + x) / den;
+            ts = ta * ts * e1 / den;
+        }
+        if do_p {
+            let (ra, ta) = step.above[1];
+            let x = rp * e2;
+            let den = one + ra * x;
+            rp = (ra + x) / den;
+            tp = ta * tp * e1 / den;
+        }
+    }
+    [(rs, ts), (rp, tp)]
+}
+
+/// R and T from the amplitudes: `|r|^2` and `|t|^2` times the flux out over the flux in
+/// (`fluxes(wave)`, 0 when nothing comes in), unpolarised the mean of s and p.
+#[inline(always)]
+fn powers<T: Real>(
+    pol: Polarization,
+    amplitudes: Pair<T>,
+    fluxes: impl Fn(Wave) -> (T, T),
+) -> Rt<T> {
+    let power = |wave: Wave, (r, t): (Complex<T>, Complex<T>)| {
+        let (f_in, f_out) = fluxes(wave);
+        Rt {
+            r: r.norm_sqr(),
+            t: if f_in > T::zero() {
+                t.norm_sqr() * f_out / f_in
+            } else {
+                T::zero()
+            },
+        }
+    };
+    let [s, p] = amplitudes;
+    match pol {
+        Polarization::S => power(Wave::S, s),
+        Polarization::P => power(Wave::P, p),
+        Polarization::Unpolarized => {
+            let (a, b) = (power(Wave::S, s), power(Wave::P, p));
+            let half = T::of_f64(0.5);
+            Rt {
+                r: (a.r + b.r) * half,
+                t: (a.t + b.t) * half,
+            }
+        }
+    }
+}
+
+/// A film at one angle of incidence and polarisation, prepared by [`Film::sweep`] for many
+/// thickness scales.
+#[derive(Debug, Clone)]
+pub struct Sweep<T> {
+    pol: Polarization,
+    /// Exactly 90 degrees: `R = 1`, `T = 0` whatever the layers.
+    grazing: bool,
+    bottom: Pair<T>,
+    /// From the substrate side up.
+    steps: Vec<Step<T>>,
+    /// `(in, out)` fluxes for s and p.
+    fluxes: [(T, T); 2],
+}
+
+impl<T: Real> Sweep<T> {
+    /// R and T with every layer's thickness multiplied by `thickness_scale` (finite, `>= 0`,
+    /// as for [`Film::rt_scaled`]; not checked).
+    #[inline]
+    pub fn rt(&self, thickness_scale: T) -> Rt<T> {
+        if self.grazing {
+            return Rt {
+                r: T::one(),
+                t: T::zero(),
+            };
+        }
+        let (do_s, do_p) = (self.pol != Polarization::P, self.pol != Polarization::S);
+        let amplitudes = airy(
+            do_s,
+            do_p,
+            self.bottom,
+            self.steps.iter().copied(),
+            thickness_scale,
+        );
+        powers(self.pol, amplitudes, |wave| match wave {
+            Wave::S => self.fluxes[0],
+            Wave::P => self.fluxes[1],
+        })
+    }
+}
+
 /// The optical constants of a stack at one wavelength, in `T`: the ambient (transparent), the
 /// layers from the ambient side with their thicknesses, and the substrate. Build with
 /// [`Stack::at`] or [`Film::new`]; evaluating it never fails.
@@ -730,7 +868,9 @@ impl<T: Real> Film<T> {
     /// R and T of the whole stack, all layers coherent, every layer's thickness multiplied by
     /// `scale` (1 for the film as built; `x * 1 = x` exactly, so the results are the same bits):
     /// [`Film::segment`] for s and p at once, sharing each medium's `q` and phase factor (the hot
-    /// path).
+    /// path). [`Sweep::rt`] is the same recursion on stored media and interfaces ([`airy`]): keep
+    /// the two in step (`rt_scaled_and_sweep_are_the_film_with_scaled_layers` checks that they
+    /// agree bit for bit).
     fn coherent_rt(&self, incidence: &Incidence, pol: Polarization, scale: T) -> Rt<T> {
         if incidence.cos == 0.0 {
             return Rt {
@@ -801,6 +941,51 @@ impl<T: Real> Film<T> {
                     t: (a.t + b.t) * half,
                 }
             }
+        }
+    }
+
+    /// The film at one angle of incidence prepared for evaluating at many thickness scales:
+    /// every medium's `q`, every interface's Fresnel coefficients and the fluxes computed once,
+    /// so that each [`Sweep::rt`] costs only the layers' phase factors and the recursion, about
+    /// half of [`Film::rt_scaled`]. `film.sweep(at, pol).rt(s)` is `film.rt_scaled(at, pol, s)`
+    /// bit for bit.
+    ///
+    /// ```
+    /// use specmap::thinfilm::{Film, Incidence, Index, Polarization};
+    ///
+    /// let (air, glass) = (Index::real(1.0)?, Index::real(1.52)?);
+    /// let film = Film::<f64>::new(550.0, air, &[(Index::new(2.0, 0.3)?, 60.0)], glass)?;
+    /// let at = Incidence::degrees(60.0)?;
+    /// let sweep = film.sweep(&at, Polarization::Unpolarized);
+    /// for s in [0.0, 0.5, 1.0, 3.0] {
+    ///     assert_eq!(sweep.rt(s), film.rt_scaled(&at, Polarization::Unpolarized, s));
+    /// }
+    /// # Ok::<(), specmap::Error>(())
+    /// ```
+    pub fn sweep(&self, incidence: &Incidence, pol: Polarization) -> Sweep<T> {
+        let (do_s, do_p) = (pol != Polarization::P, pol != Polarization::S);
+        let g = self.xi2(incidence);
+        let last = self.n.len() - 1;
+        let sub = self.medium(last, incidence, g);
+        let mut here = self.medium(last - 1, incidence, g);
+        let bottom = interfaces(do_s, do_p, &here, &sub);
+        let mut steps = Vec::with_capacity(last - 1);
+        for j in (1..last).rev() {
+            let above = self.medium(j - 1, incidence, g);
+            steps.push(Step {
+                q: here.q,
+                d_over_lambda: self.d_over_lambda[j],
+                above: interfaces(do_s, do_p, &above, &here),
+            });
+            here = above;
+        }
+        let ambient = self.ambient(incidence);
+        Sweep {
+            pol,
+            grazing: incidence.cos == 0.0,
+            bottom,
+            steps,
+            fluxes: [Wave::S, Wave::P].map(|w| (flux(w, &ambient), flux(w, &sub))),
         }
     }
 
@@ -1339,10 +1524,11 @@ mod tests {
     }
 
     #[test]
-    fn rt_scaled_is_the_film_with_scaled_layers() {
+    fn rt_scaled_and_sweep_are_the_film_with_scaled_layers() {
         // Two layers, one absorbing, on a metal: scaling every thickness by s in the evaluation
         // is the film built with the thicknesses times s, for s and p and both, at 0 and 70
-        // degrees, including s = 0 (the bare substrate) and s = 1 (the film itself, bit for bit).
+        // degrees, including s = 0 (the bare substrate) and s = 1 (the film itself, bit for bit);
+        // a sweep is rt_scaled bit for bit.
         let (air, metal) = (idx(1.0, 0.0), idx(3.1, 3.3));
         let layers = [(idx(1.38, 0.0), 95.0), (idx(2.0, 0.3), 60.0)];
         let base = Film::<f64>::new(520.0, air, &layers, metal).unwrap();
@@ -1359,6 +1545,16 @@ mod tests {
                     assert!(
                         (got.r - want.r).abs() < 1e-13 && (got.t - want.t).abs() < 1e-13,
                         "{degrees} {pol} x{s}: {got:?} vs {want:?}"
+                    );
+                }
+            }
+            for pol in [Polarization::S, Polarization::P, Polarization::Unpolarized] {
+                let sweep = base.sweep(&at, pol);
+                for s in [0.0, 0.37, 1.0, 2.5] {
+                    assert_eq!(
+                        sweep.rt(s),
+                        base.rt_scaled(&at, pol, s),
+                        "{degrees} {pol} x{s}"
                     );
                 }
             }

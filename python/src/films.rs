@@ -4,7 +4,8 @@
 //! The stack's optical constants are built once per wavelength (the library's [`Stack::at`],
 //! which checks every medium and names the one at fault); each (scale, angle) then evaluates
 //! that [`Film`] with [`Film::rt_scaled`], which multiplies every layer's thickness without
-//! rebuilding anything, so no element allocates or calls Python.
+//! rebuilding anything, or, for many scales, prepares each (angle, wavelength) once with
+//! [`Film::sweep`] and evaluates it at every scale; no element allocates or calls Python.
 
 use crate::errors::OrPy;
 use numpy::ndarray::Array3;
@@ -53,6 +54,10 @@ impl MediumArg {
         }
     }
 }
+
+/// Scales per parallel task from which each (angle, wavelength) is prepared once
+/// ([`Film::sweep`]) rather than evaluated afresh for each scale ([`Film::rt_scaled`]).
+const SWEEP_MIN_SCALES: usize = 8;
 
 /// Elements per parallel task: enough to amortise rayon's scheduling, few enough to balance.
 const CHUNK: usize = 2048;
@@ -182,23 +187,45 @@ fn evaluate(
             })?;
         }
     }
-    let (nw, na) = (wavelengths.len(), incidences.len());
-    let total = scales.len() * na * nw;
+    let (nw, na, ns) = (wavelengths.len(), incidences.len(), scales.len());
+    let total = ns * na * nw;
     let mut r = vec![0.0; total];
     let mut t = vec![0.0; total];
-    r.par_chunks_mut(CHUNK)
-        .zip(t.par_chunks_mut(CHUNK))
-        .enumerate()
-        .for_each(|(c, (r, t))| {
-            let start = c * CHUNK;
-            for (j, (r, t)) in r.iter_mut().zip(t.iter_mut()).enumerate() {
-                let i = start + j;
-                let (w, a, s) = (i % nw, (i / nw) % na, i / (nw * na));
-                let rt = films[w].rt_scaled(&incidences[a], pol, scales[s]);
-                *r = rt.r;
-                *t = rt.t;
-            }
-        });
+    // Scales per parallel task: up to 64, fewer where that leaves some threads idle.
+    let block = (ns / (4 * rayon::current_num_threads())).clamp(1, 64);
+    if block >= SWEEP_MIN_SCALES {
+        // Each task takes a block of scales, contiguous in the output: each (angle,
+        // wavelength) is prepared once ([`Film::sweep`]: media, interfaces, fluxes) and
+        // evaluated at each of the block's scales.
+        let plane = na * nw;
+        r.par_chunks_mut(block * plane)
+            .zip(t.par_chunks_mut(block * plane))
+            .zip(scales.par_chunks(block))
+            .for_each(|((r, t), scales)| {
+                for (aw, film) in (0..plane).map(|aw| (aw, &films[aw % nw])) {
+                    let sweep = film.sweep(&incidences[aw / nw], pol);
+                    for (k, s) in scales.iter().enumerate() {
+                        let rt = sweep.rt(*s);
+                        r[k * plane + aw] = rt.r;
+                        t[k * plane + aw] = rt.t;
+                    }
+                }
+            });
+    } else {
+        r.par_chunks_mut(CHUNK)
+            .zip(t.par_chunks_mut(CHUNK))
+            .enumerate()
+            .for_each(|(c, (r, t))| {
+                let start = c * CHUNK;
+                for (j, (r, t)) in r.iter_mut().zip(t.iter_mut()).enumerate() {
+                    let i = start + j;
+                    let (w, a, s) = (i % nw, (i / nw) % na, i / (nw * na));
+                    let rt = films[w].rt_scaled(&incidences[a], pol, scales[s]);
+                    *r = rt.r;
+                    *t = rt.t;
+                }
+            });
+    }
     if let Some(i) = (0..total).find(|&i| !(r[i].is_finite() && t[i].is_finite())) {
         let (w, a, s) = (i % nw, (i / nw) % na, i / (nw * na));
         return Err(PyValueError::new_err(format!(

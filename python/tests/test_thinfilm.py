@@ -65,6 +65,33 @@ def test_matches_tmm_over_the_grid(name, layers, substrate, pol):
 
 
 @pytest.mark.parametrize("pol", ["s", "p", "u"])
+def test_many_scales_match_tmm(pol):
+    # From 8 scales each (angle, wavelength) is prepared once and swept over the scales: the
+    # same numbers, in the same (scale, angle, wavelength) order.
+    layers, substrate = [(1.38, 95.0), (2.0 + 0.3j, 60.0)], 3.1 + 3.3j
+    scales = np.linspace(0.0, 2.0, 9)
+    waves, angles = WAVELENGTHS[::3], np.array([0.0, 45.0, 70.0])
+    R, T = specmap.thinfilm(layers, substrate, waves, angles_deg=angles, thickness_scale=scales,
+                            pol=pol)
+    R_ref, T_ref = tmm_grid(layers, substrate, pol, wavelengths=waves, angles=angles,
+                            scales=scales)
+    np.testing.assert_allclose(R, R_ref, rtol=0, atol=TOL)
+    np.testing.assert_allclose(T, T_ref, rtol=0, atol=TOL)
+
+
+def test_thousands_of_scales_at_one_angle_and_wavelength():
+    # More scales than one parallel task takes (2048): every one in its place.
+    layers, substrate = [(2.3, 150.0), (1.46, 80.0)], 1.52
+    scales = np.linspace(0.0, 3.0, 5001)
+    R, T = specmap.thinfilm(layers, substrate, 610.0, angles_deg=35.0, thickness_scale=scales,
+                            pol="u")
+    assert R.shape == T.shape == (5001,)
+    for i in range(0, 5001, 97):
+        r, t = tmm_rt(layers, substrate, 610.0, 35.0, "u", scale=scales[i])
+        assert abs(R[i] - r) < TOL and abs(T[i] - t) < TOL, i
+
+
+@pytest.mark.parametrize("pol", ["s", "p", "u"])
 def test_total_internal_reflection_matches_tmm(pol):
     # Glass ambient, an air gap, glass below: beyond 41.8 degrees the gap is evanescent and
     # transmission is frustrated TIR.
