@@ -505,3 +505,37 @@ fn measure(
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A source whose channel c of row r at pixel x is `100 r + 10 c + x`.
+    struct Ramp;
+    impl LineSource for Ramp {
+        fn line(&self, channel: usize, row: usize, out: &mut [f32]) {
+            for (x, v) in out.iter_mut().enumerate() {
+                *v = (100 * row + 10 * channel + x) as f32;
+            }
+        }
+    }
+
+    #[test]
+    fn memory_holds_lines_and_rows_pixel_interleaved_where_they_belong() {
+        let (width, channels) = (3, 2);
+        let mut m = Memory {
+            width,
+            channels,
+            data: vec![-1.0; 4 * width * channels],
+        };
+        // Rows 1 and 2 as lines (rows counted from the source's first), row 3 as interleaved.
+        m.lines(1, 2, &Ramp).unwrap();
+        m.rows(3, &[7.0; 6]).unwrap();
+        let at = |y: usize, x: usize, c: usize| m.data[(y * width + x) * channels + c];
+        assert_eq!(at(0, 2, 1), -1.0, "row 0 untouched");
+        assert_eq!(at(1, 2, 1), 12.0);
+        assert_eq!(at(2, 0, 0), 100.0);
+        assert_eq!(at(2, 1, 1), 111.0);
+        assert_eq!(at(3, 2, 1), 7.0);
+    }
+}
