@@ -107,6 +107,9 @@ def bench_upsample(args):
         rgb = np.stack([channels[c].pixels for c in "RGB"], -1).astype(np.float32)
     assert rgb.shape == (512, 1024, 3)
 
+    # numpy first: rayon's threads spin for a while after specmap's calls, and would slow it.
+    basis = mallett.values.T.astype(np.float32)
+    mallett_seconds, _ = best_of(args.runs, lambda: rgb.reshape(-1, 3) @ basis)
     seconds, (wavelengths, spectra) = best_of(args.runs, lambda: specmap.upsample(rgb))
     assert spectra.shape == (512, 1024, 81)
     colours, _ = best_of(args.runs, lambda: specmap.upsample(rgb, light="D65"))
@@ -120,8 +123,6 @@ def bench_upsample(args):
 
     cli_seconds, _ = best_of(args.runs, convert)
     in_memory, _ = best_of(args.runs, lambda: specmap.convert(source))
-    basis = mallett.values.T.astype(np.float32)
-    mallett_seconds, _ = best_of(args.runs, lambda: rgb.reshape(-1, 3) @ basis)
     print(
         f"upsample: CLI convert --compression none {cli_seconds:.3f} s end to end; "
         f"specmap.convert(path) in memory {in_memory:.3f} s; specmap.upsample {seconds:.3f} s; "
