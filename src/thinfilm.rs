@@ -615,8 +615,8 @@ struct Step<T> {
 }
 
 /// The stack's s and p amplitudes `(r, t)`: the bottom interface's, folded up through `steps`
-/// (from the substrate side) with every thickness times `scale`; the arithmetic of
-/// [`Film::coherent_rt`]'s loop, operation for operation, on a [`Sweep`]'s stored steps.
+/// (from the substrate side) with every thickness times `scale`: [`Film::coherent_rt`]'s loop
+/// (the same [`airy_step`]) on a [`Sweep`]'s stored steps.
 #[inline(always)]
 fn airy<T: Real>(
     do_s: bool,
@@ -631,21 +631,28 @@ fn airy<T: Real>(
         let e1 = propagate(step.q, step.d_over_lambda * scale);
         let e2 = e1 * e1;
         if do_s {
-            let (ra, ta) = step.above[0];
-            let x = rs * e2;
-            let den = one + ra * x;
-            rs = (ra + x) / den;
-            ts = ta * ts * e1 / den;
+            (rs, ts) = airy_step((rs, ts), step.above[0], e1, e2, one);
         }
         if do_p {
-            let (ra, ta) = step.above[1];
-            let x = rp * e2;
-            let den = one + ra * x;
-            rp = (ra + x) / den;
-            tp = ta * tp * e1 / den;
+            (rp, tp) = airy_step((rp, tp), step.above[1], e1, e2, one);
         }
     }
     [(rs, ts), (rp, tp)]
+}
+
+/// One layer of the Airy recursion: the amplitudes `(r, t)` below it seen through the interface
+/// above it (`(ra, ta)`), the layer's phase `e1` and its square `e2`.
+#[inline(always)]
+fn airy_step<T: Real>(
+    (r, t): (Complex<T>, Complex<T>),
+    (ra, ta): (Complex<T>, Complex<T>),
+    e1: Complex<T>,
+    e2: Complex<T>,
+    one: Complex<T>,
+) -> (Complex<T>, Complex<T>) {
+    let x = r * e2;
+    let den = one + ra * x;
+    ((ra + x) / den, ta * t * e1 / den)
 }
 
 /// R and T from the amplitudes: `|r|^2` and `|t|^2` times the flux out over the flux in
@@ -868,9 +875,9 @@ impl<T: Real> Film<T> {
     /// R and T of the whole stack, all layers coherent, every layer's thickness multiplied by
     /// `scale` (1 for the film as built; `x * 1 = x` exactly, so the results are the same bits):
     /// [`Film::segment`] for s and p at once, sharing each medium's `q` and phase factor (the hot
-    /// path). [`Sweep::rt`] is the same recursion on stored media and interfaces ([`airy`]): keep
-    /// the two in step (`rt_scaled_and_sweep_are_the_film_with_scaled_layers` checks that they
-    /// agree bit for bit).
+    /// path). [`Sweep::rt`] is the same recursion, one [`airy_step`] per layer, on stored media
+    /// and interfaces ([`airy`]); `rt_scaled_and_sweep_are_the_film_with_scaled_layers` checks
+    /// that they agree bit for bit.
     fn coherent_rt(&self, incidence: &Incidence, pol: Polarization, scale: T) -> Rt<T> {
         if incidence.cos == 0.0 {
             return Rt {
@@ -903,18 +910,12 @@ impl<T: Real> Film<T> {
             let e1 = propagate(here.q, self.d_over_lambda[j] * scale);
             let e2 = e1 * e1;
             if do_s {
-                let (ra, ta) = interface(Wave::S, &above, &here);
-                let x = rs * e2;
-                let den = one + ra * x;
-                rs = (ra + x) / den;
-                ts = ta * ts * e1 / den;
+                let above_s = interface(Wave::S, &above, &here);
+                (rs, ts) = airy_step((rs, ts), above_s, e1, e2, one);
             }
             if do_p {
-                let (ra, ta) = interface(Wave::P, &above, &here);
-                let x = rp * e2;
-                let den = one + ra * x;
-                rp = (ra + x) / den;
-                tp = ta * tp * e1 / den;
+                let above_p = interface(Wave::P, &above, &here);
+                (rp, tp) = airy_step((rp, tp), above_p, e1, e2, one);
             }
             here = above;
             j -= 1;
