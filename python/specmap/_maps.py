@@ -23,7 +23,7 @@ def _existing(path: PathLike, what: str = "map") -> str:
     """``path`` as a string; FileNotFoundError if no such file (a ``{face}`` pattern passes)."""
     text = os.fspath(path)
     if "{face}" not in text and not os.path.exists(text):
-        raise FileNotFoundError(2, f"{text}: no such {what}", text)
+        raise FileNotFoundError(2, f"no such {what}", text)
     return text
 
 
