@@ -682,3 +682,42 @@ fn the_ev_scale_keeps_the_sun_mask_and_never_flushes_pixels() {
     let dark = specmap::envmap::files::read_stored_channel(&out, "S0.550,000000nm").unwrap();
     assert!(dark.iter().all(|&v| v > 0.0), "no pixel is written as 0");
 }
+
+/// `--threads N` changes how the work is split, not what is written: one thread and two write
+/// the same pixels, read back by the `exr` crate.
+#[test]
+fn threads_split_the_work_and_write_the_same_pixels() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = sample("forest.exr");
+    let pixels = |threads: &str| {
+        let out = dir.path().join(format!("t{threads}.exr"));
+        let o = out.to_str().unwrap();
+        convert_json(&[
+            &input,
+            "-o",
+            o,
+            "--threads",
+            threads,
+            "--size",
+            "64",
+            "--quiet",
+        ]);
+        let image = read_all_flat_layers_from_file(&out).unwrap();
+        let layer = &image.layer_data[0];
+        let mut channels: Vec<(String, Vec<f32>)> = layer
+            .channel_data
+            .list
+            .iter()
+            .map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect()))
+            .collect();
+        channels.sort_by(|a, b| a.0.cmp(&b.0));
+        channels
+    };
+    let one = pixels("1");
+    assert!(one.len() > 80, "{} channels", one.len());
+    assert_eq!(one, pixels("2"));
+    // Refused by the flag's parser (a usage error: exit 2, nothing written).
+    let zero = specmap(&["convert", &input, "-o", "x.exr", "--threads", "0"]);
+    assert_eq!(zero.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&zero.stderr).contains("--threads"));
+}

@@ -44,6 +44,9 @@ pub(crate) struct ConvertArgs {
     /// Machine-readable summary.
     #[arg(long)]
     json: bool,
+    /// Threads reading, computing and compressing (default: every core), as `batch --threads`.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
+    threads: Option<u16>,
 }
 
 /// The flags that say how a map is converted (shared by `convert`, `inspect` and `batch`).
@@ -510,8 +513,19 @@ pub(crate) fn report(
 ) -> anyhow::Result<ConvertReport> {
     let opts = a.options.to_options()?;
     check_files(a, &opts)?;
-    convert::convert(&a.input, &a.output, &opts, progress)
-        .with_context(|| format!("converting {}", a.input))
+    let work = || {
+        convert::convert(&a.input, &a.output, &opts, progress)
+            .with_context(|| format!("converting {}", a.input))
+    };
+    match a.threads {
+        // A pool of its own, not the global one: the Python package calls this once per map.
+        Some(n) => rayon::ThreadPoolBuilder::new()
+            .num_threads(n as usize)
+            .build()
+            .context("--threads: starting the thread pool")?
+            .install(work),
+        None => work(),
+    }
 }
 
 /// The inputs exist and are not the output, which is an OpenEXR file that can be written.
