@@ -162,7 +162,9 @@ def upsample(
         ``"auto"``: an ``(H, W, 3)`` array shaped like a map (lat-long 2:1, cube, cross, strip)
         is converted as ``convert`` converts a file (the scene's lights found, the sun given its
         own spectrum); any other array is read under CIE D65, daylight-coloured colours given the
-        CIE daylight of their colour. A light's name (``"A"``, ``"FL11"``, a CSV file): every
+        CIE daylight of their colour (NaN, infinite and negative values of a map are set to 0
+        and counted in a ``RuntimeWarning``, as ``convert`` counts them; elsewhere a non-finite
+        value is a ``ValueError``). A light's name (``"A"``, ``"FL11"``, a CSV file): every
         colour is that light's spectrum times a smooth modulation.
     space:
         The RGB space: ``"sRGB"`` (Rec.709 primaries, D65), ``"Rec2020"``, ``"ACEScg"``,
@@ -189,7 +191,9 @@ def upsample(
         report, wl, spectra, _rgb, _sun = _specmap.convert_image(
             np.ascontiguousarray(a.reshape(h * w, 3)), w, argv_of(flags)
         )
-        _warn_inexact(json.loads(report)["spectra"].get("nearest", 0), a.shape[:-1])
+        facts = json.loads(report)
+        _warn_sanitized(facts["sanitized"])
+        _warn_inexact(facts["spectra"].get("nearest", 0), a.shape[:-1])
         return wl, spectra
     if options:
         raise ValueError(
@@ -205,6 +209,18 @@ def upsample(
 
 def _space_flag(space: str) -> str:
     return space.lower().replace("_", "-").replace(" ", "-")
+
+
+def _warn_sanitized(sanitized: Dict[str, int]) -> None:
+    """The converter's count of values it set to 0 (as ``convert`` reports them), as a warning."""
+    bad, negative = sanitized.get("non_finite", 0), sanitized.get("negative", 0)
+    if bad or negative:
+        warnings.warn(
+            f"{bad} NaN or infinite and {negative} negative channel values were set to 0 "
+            "(the converter's premise; convert(..., strict=True) refuses NaN and infinities)",
+            RuntimeWarning,
+            stacklevel=3,
+        )
 
 
 def _warn_inexact(count: int, shape) -> None:

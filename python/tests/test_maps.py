@@ -139,9 +139,12 @@ def test_upsample_of_a_map_shaped_array_is_convert_of_the_file(sunrise):
     with OpenEXR.File(sunrise, separate_channels=True) as f:
         channels = f.channels()
         rgb = np.stack([channels[c].pixels for c in "RGB"], -1).astype(np.float32)
-    # The converter's nearest spectra (colours no light of the map makes) are said, not hidden.
-    with pytest.warns(RuntimeWarning, match="of 524288 colours"):
+    # The converter's nearest spectra (colours no light of the map makes) and the negative
+    # values it set to 0 (the CLI's report counts both) are said, not hidden.
+    with pytest.warns(RuntimeWarning) as caught:
         wl, spectra = specmap.upsample(rgb)
+    said = " ".join(str(w.message) for w in caught)
+    assert "of 524288 colours" in said and "negative channel values were set to 0" in said
     want = specmap.convert(sunrise, precision="float")
     assert want["spectra"].shape == spectra.shape
     np.testing.assert_array_equal(wl, want["wavelengths"])
@@ -189,3 +192,12 @@ def test_errors_are_python_exceptions_of_their_kind(sunrise, tmp_path):
         specmap.read_spectral(text)
     with pytest.raises(ValueError, match="is the input"):
         specmap.convert(sunrise, sunrise)
+
+
+def test_a_map_s_non_finite_and_negative_values_are_counted_not_hidden():
+    rgb = np.full((8, 16, 3), 0.5, dtype=np.float32)
+    rgb[0, 0, 0], rgb[1, 1, 1] = np.nan, np.inf
+    rgb[2, 2] = -0.25  # no light at all: set to 0, where an out-of-gamut colour would be kept
+    with pytest.warns(RuntimeWarning, match="2 NaN or infinite and 3 negative"):
+        _, spectra = specmap.upsample(rgb)
+    assert np.isfinite(spectra).all() and spectra.min() >= 0.0
