@@ -308,13 +308,7 @@ def spectrum(
         s = Spectrum(src.name, src.wavelengths, src.values, src.kind)
         default: Interpolation = "linear" if s.is_light else "cie167"
     elif isinstance(src, (str, os.PathLike)):
-        spec = os.fspath(src)
-        if not isinstance(spec, str):
-            raise TypeError(f"spectrum: a path must be text, not {type(spec).__name__}")
-        if not isinstance(src, str) and not os.path.exists(_path_part(spec)):
-            # A Path that is missing: say so, rather than "no built-in table named ..."
-            raise FileNotFoundError(2, "No such file or directory", spec)
-        label, w, v, kind = _specmap.table(spec)
+        label, w, v, kind = _specmap.table(_spec_text(src, "spectrum: "))
         s = Spectrum(label, w, v, kind)
         default = "linear" if s.is_light else "cie167"
     elif isinstance(src, SpectralData):
@@ -713,15 +707,21 @@ def _range_flag(wavelengths: Union[npt.ArrayLike, range, str]) -> str:
     return f"{_num(start)}:{_num(end)}:{_num((end - start) / (len(w) - 1))}"
 
 
+def _spec_text(src: Union[str, "os.PathLike[str]"], prefix: str = "") -> str:
+    """A name, TABLE:COLUMN or path as the CLI takes it. A path object that is missing is a
+    FileNotFoundError (rather than "no built-in table named ..."); a str may be a table's name."""
+    spec = os.fspath(src)
+    if not isinstance(spec, str):
+        raise TypeError(f"{prefix}a path must be text, not {type(spec).__name__}")
+    if not isinstance(src, str) and not os.path.exists(_path_part(spec)):
+        raise FileNotFoundError(2, "No such file or directory", spec)
+    return spec
+
+
 def _as_spec(s: SpectrumLike, tmp: str, fallback: str) -> str:
     """A name or path as the CLI takes it; a spectrum written to a CSV in ``tmp`` first."""
     if isinstance(s, (str, os.PathLike)):
-        spec = os.fspath(s)
-        if not isinstance(spec, str):
-            raise TypeError(f"a path must be text, not {type(spec).__name__}")
-        if not isinstance(s, str) and not os.path.exists(_path_part(spec)):
-            raise FileNotFoundError(2, "No such file or directory", spec)
-        return spec
+        return _spec_text(s)
     if not isinstance(s, (Spectrum, SpectralData)):
         raise TypeError(
             "expected a table name, TABLE:COLUMN, a CSV path, a Spectrum or a "

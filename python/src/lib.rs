@@ -18,6 +18,13 @@ mod spectra;
 
 use pyo3::prelude::*;
 
+/// `argv` (a command's flags, as the Python wrappers build them) parsed by the CLI's own clap
+/// definitions: `T` is a `Parser` flattening the command's args; a refused flag is a ValueError
+/// with clap's message.
+pub(crate) fn parse_flags<T: clap::Parser>(command: &str, argv: Vec<String>) -> PyResult<T> {
+    T::try_parse_from(std::iter::once(command.to_string()).chain(argv)).map_err(errors::from_clap)
+}
+
 /// The native module: each function is documented where it is defined.
 #[pymodule]
 fn _specmap(m: &Bound<'_, PyModule>) -> PyResult<()> {

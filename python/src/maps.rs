@@ -4,7 +4,8 @@
 
 use crate::cli::convert::{input_guard, ConvertArgs, ConvertOptionArgs};
 use crate::cli::inspect::InspectArgs;
-use crate::errors::{from_clap, OrPy};
+use crate::errors::OrPy;
+use crate::parse_flags;
 use clap::Parser;
 use numpy::ndarray::{Array1, Array2, Array3};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyReadonlyArray2};
@@ -12,7 +13,7 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use rayon::prelude::*;
 use specmap::envmap::convert::{self, upsample::Upsample, Spectra};
-use specmap::envmap::files::read_spectral_rows;
+use specmap::envmap::files::{read_spectral_info, read_spectral_rows};
 use specmap::envmap::RgbImage;
 use std::path::Path;
 
@@ -24,11 +25,6 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(upsample_colours, m)?)?;
     m.add_function(wrap_pyfunction!(read_spectral, m)?)?;
     Ok(())
-}
-
-/// `clap` parses `argv` (a command's flags) as the CLI does; `T` the command's flattened args.
-fn parse<T: Parser>(command: &str, argv: Vec<String>) -> PyResult<T> {
-    T::try_parse_from(std::iter::once(command.to_string()).chain(argv)).map_err(from_clap)
 }
 
 #[derive(Parser)]
@@ -65,7 +61,7 @@ struct OptionsCommand {
 /// `specmap inspect ARGV --json`'s JSON text.
 #[pyfunction]
 fn inspect(py: Python<'_>, argv: Vec<String>) -> PyResult<String> {
-    let a: InspectCommand = parse("inspect", argv)?;
+    let a: InspectCommand = parse_flags("inspect", argv)?;
     py.detach(|| -> anyhow::Result<String> { Ok(crate::cli::inspect::json(&a.args)?.to_string()) })
         .or_py()
 }
@@ -73,7 +69,7 @@ fn inspect(py: Python<'_>, argv: Vec<String>) -> PyResult<String> {
 /// `specmap convert ARGV --json`'s report as JSON text; the file written as the CLI writes it.
 #[pyfunction]
 fn convert_file(py: Python<'_>, argv: Vec<String>) -> PyResult<String> {
-    let a: ConvertCommand = parse("convert", argv)?;
+    let a: ConvertCommand = parse_flags("convert", argv)?;
     py.detach(|| -> anyhow::Result<String> {
         let report = crate::cli::convert::report(&a.args, &|_, _| {})?;
         Ok(serde_json::to_string(&report)?)
@@ -94,7 +90,7 @@ type InMemory<'py> = (
 /// `specmap convert ARGV` without an output: the report and the spectra in memory.
 #[pyfunction]
 fn convert_in_memory(py: Python<'_>, argv: Vec<String>) -> PyResult<InMemory<'_>> {
-    let a: InMemoryCommand = parse("convert", argv)?;
+    let a: InMemoryCommand = parse_flags("convert", argv)?;
     let (report, spectra) = py
         .detach(|| -> anyhow::Result<_> {
             let opts = a.options.to_options()?;
@@ -114,7 +110,7 @@ fn convert_image<'py>(
     width: usize,
     argv: Vec<String>,
 ) -> PyResult<InMemory<'py>> {
-    let a: OptionsCommand = parse("upsample", argv)?;
+    let a: OptionsCommand = parse_flags("upsample", argv)?;
     let image = rgb_image(&rgb, width)?;
     let (report, spectra) = py
         .detach(|| -> anyhow::Result<_> {
@@ -204,7 +200,7 @@ fn upsample_colours<'py>(
     light: Option<String>,
     argv: Vec<String>,
 ) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray2<f32>>, usize)> {
-    let a: OptionsCommand = parse("upsample", argv)?;
+    let a: OptionsCommand = parse_flags("upsample", argv)?;
     let view = rgb.as_array();
     if view.ncols() != 3 {
         return Err(PyValueError::new_err(format!(
@@ -252,21 +248,22 @@ fn read_spectral<'py>(
 )> {
     let (info, spectra, rgb) = py
         .detach(|| -> specmap::Result<_> {
-            let mut spectra = Vec::new();
-            let mut rgb = Vec::new();
-            let info = read_spectral_rows(Path::new(path), |_, row| {
-                spectra.push(row.to_vec());
-            })?;
-            let n = info.wavelengths_nm.len();
-            let per = n + if info.has_rgb { 3 } else { 0 };
-            let flat: Vec<f32> = spectra.concat();
+            // Each row split as it comes: the bands, then R, G, B where the file has them.
+            let info = read_spectral_info(Path::new(path))?;
+            let (n, has_rgb) = (info.wavelengths_nm.len(), info.has_rgb);
+            let per = n + if has_rgb { 3 } else { 0 };
             let mut bands = Vec::with_capacity(info.width * info.height * n);
-            for p in flat.chunks(per) {
-                bands.extend_from_slice(&p[..n]);
-                if info.has_rgb {
-                    rgb.extend_from_slice(&p[n..n + 3]);
+            let mut rgb = Vec::with_capacity(if has_rgb {
+                info.width * info.height * 3
+            } else {
+                0
+            });
+            let info = read_spectral_rows(Path::new(path), |_, row| {
+                for p in row.chunks_exact(per) {
+                    bands.extend_from_slice(&p[..n]);
+                    rgb.extend_from_slice(&p[n..]);
                 }
-            }
+            })?;
             Ok((info, bands, rgb))
         })
         .or_py()?;

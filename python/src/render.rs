@@ -1,7 +1,7 @@
 //! The spectral renderer: `render`, `specmap render`'s one image returned instead of written.
 
 use crate::cli::render_args::{BackendArg, RenderArgs};
-use crate::errors::{from_clap, OrPy};
+use crate::errors::OrPy;
 use clap::Parser;
 use numpy::ndarray::Array3;
 use numpy::{IntoPyArray, PyArray3};
@@ -22,9 +22,7 @@ fn render<'py>(
     py: Python<'py>,
     argv: Vec<String>,
 ) -> PyResult<(Bound<'py, PyArray3<f32>>, String)> {
-    let args = RenderCommand::try_parse_from(std::iter::once("render".to_string()).chain(argv))
-        .map_err(from_clap)?
-        .args;
+    let args = crate::parse_flags::<RenderCommand>("render", argv)?.args;
     if args.backend != BackendArg::Cpu {
         provide_runtime_dir();
     }

@@ -1,6 +1,6 @@
 //! Spectra, colour and the paper's fit: `table`, `resample`, `xyz`, `fit`.
 
-use crate::errors::{from_clap, OrPy};
+use crate::errors::OrPy;
 use clap::Parser;
 use numpy::ndarray::{Array2, ArrayView2, Axis};
 use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1, PyReadonlyArrayDyn};
@@ -233,8 +233,7 @@ fn xyz_weights(
 /// report as `specmap fit --json` prints it and the fit as `specmap fit -o` writes it.
 #[pyfunction]
 fn fit(py: Python<'_>, argv: Vec<String>) -> PyResult<(String, String)> {
-    let args = FitCommand::try_parse_from(std::iter::once("fit".to_string()).chain(argv))
-        .map_err(from_clap)?;
+    let args: FitCommand = crate::parse_flags("fit", argv)?;
     py.detach(move || {
         let (report, fit) = crate::cli::fit::json(&args.args)?;
         Ok::<_, anyhow::Error>((report.to_string(), serde_json::to_string(&fit)?))
