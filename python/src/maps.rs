@@ -11,7 +11,6 @@ use numpy::ndarray::{Array1, Array2, Array3};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyReadonlyArray2};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use rayon::prelude::*;
 use specmap::envmap::convert::{self, upsample::Upsample, Spectra};
 use specmap::envmap::files::{read_spectral_info, read_spectral_rows};
 use specmap::envmap::RgbImage;
@@ -143,49 +142,28 @@ fn rgb_image(rgb: &PyReadonlyArray2<'_, f32>, width: usize) -> PyResult<RgbImage
     Ok(image)
 }
 
-/// The report and the spectra split into numpy arrays.
+/// The report and the spectra as numpy arrays (the planes move, not copied).
 fn in_memory<'py>(
     py: Python<'py>,
     report: &convert::ConvertReport,
     s: Spectra,
 ) -> PyResult<InMemory<'py>> {
     let json = serde_json::to_string(report).map_err(|e| PyValueError::new_err(e.to_string()))?;
-    let n = s.wavelengths_nm.len();
-    let (h, w) = (s.height, s.width);
-    let (spectra, rgb, sun) = py.detach(|| split(&s.data, n, h * w));
+    let (h, w, n) = (s.height, s.width, s.wavelengths_nm.len());
     let shape_err = |e: numpy::ndarray::ShapeError| PyValueError::new_err(e.to_string());
     Ok((
         json,
         Array1::from(s.wavelengths_nm).into_pyarray(py),
-        Array3::from_shape_vec((h, w, n), spectra)
+        Array3::from_shape_vec((h, w, n), s.spectra)
             .map_err(shape_err)?
             .into_pyarray(py),
-        Array3::from_shape_vec((h, w, 3), rgb)
+        Array3::from_shape_vec((h, w, 3), s.rgb)
             .map_err(shape_err)?
             .into_pyarray(py),
-        Array2::from_shape_vec((h, w), sun)
+        Array2::from_shape_vec((h, w), s.sun)
             .map_err(shape_err)?
             .into_pyarray(py),
     ))
-}
-
-/// Pixel-interleaved `bands + 4` channels -> the bands, the RGB and the sun mask, each packed.
-fn split(data: &[f32], bands: usize, pixels: usize) -> (Vec<f32>, Vec<f32>, Vec<f32>) {
-    let per = bands + 4;
-    let mut spectra = vec![0f32; pixels * bands];
-    let mut rgb = vec![0f32; pixels * 3];
-    let mut sun = vec![0f32; pixels];
-    spectra
-        .par_chunks_mut(bands.max(1))
-        .zip(rgb.par_chunks_mut(3))
-        .zip(sun.par_iter_mut())
-        .zip(data.par_chunks(per))
-        .for_each(|(((s, c), m), p)| {
-            s.copy_from_slice(&p[..bands]);
-            c.copy_from_slice(&p[bands..bands + 3]);
-            *m = p[bands + 3];
-        });
-    (spectra, rgb, sun)
 }
 
 /// `(n, 3)` linear RGB colours -> `(wavelengths, (n, N) spectra, inexact count)` under `light`

@@ -92,9 +92,13 @@ pub struct Spectra {
     pub height: usize,
     /// The bands' wavelengths (nm).
     pub wavelengths_nm: Vec<f64>,
-    /// Row by row, each pixel's bands, then its R, G, B and sun mask (1 on the sun's pixels):
-    /// `wavelengths_nm.len() + 4` values per pixel, the values a float spectral file holds.
-    pub data: Vec<f32>,
+    /// Row by row, each pixel's bands (`wavelengths_nm.len()` values): what a float spectral
+    /// file holds.
+    pub spectra: Vec<f32>,
+    /// Row by row, each pixel's R, G, B (the file's preview channels).
+    pub rgb: Vec<f32>,
+    /// Row by row, 1 on the sun's pixels, else 0.
+    pub sun: Vec<f32>,
 }
 
 /// Converts `input` as [`convert`] does and keeps the spectra in memory, writing no file (the
@@ -141,13 +145,15 @@ fn to_memory(
     };
     let analysis = analyse::analyse(&read, opts)?;
     let plan = plan::plan(read, &analysis, opts, None)?;
-    let (written, data) = write::in_memory(&plan, &analysis.scene.cells, progress)?;
+    let (written, planes) = write::in_memory(&plan, &analysis.scene.cells, progress)?;
     let image = &plan.input.map.image;
     let spectra = Spectra {
         width: image.width,
         height: image.height,
         wavelengths_nm: plan.grid.wavelengths_nm().collect(),
-        data,
+        spectra: planes.spectra,
+        rgb: planes.rgb,
+        sun: planes.sun,
     };
     Ok((
         ConvertReport::new(input, &analysis, &plan, written),

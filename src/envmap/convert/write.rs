@@ -17,6 +17,7 @@ use crate::envmap::roundtrip::stats::{Floor, RoundTripAccumulator, RoundTripStat
 use crate::envmap::scene::Cells;
 use crate::error::{Error, Result};
 use rayon::prelude::*;
+use rayon::slice::ChunksMut;
 use std::path::Path;
 use std::time::Instant;
 
@@ -233,24 +234,20 @@ fn write_spectral(
     Ok(stats(per_pixel, bytes, tally, t1, seconds_encode))
 }
 
-/// The map's spectra computed as [`write`] writes them, kept in memory: the stats and every
-/// pixel's channels ([`channel_names`]: the bands, R, G, B, sun), row by row, as f32.
+/// The map's spectra computed as [`write`] writes them, kept in memory: the stats and the
+/// planes (each pixel's bands, its R, G, B and its sun mask, row by row, as f32).
 pub(crate) fn in_memory(
     plan: &Plan,
     cells: &Cells,
     progress: &(dyn Fn(usize, usize) + Sync),
-) -> Result<(WriteStats, Vec<f32>)> {
-    let map = &plan.input.map;
-    let per_pixel = channel_names(plan).len();
-    let mut sink = Memory {
-        width: map.image.width,
-        channels: per_pixel,
-        data: vec![0.0; map.image.width * map.image.height * per_pixel],
-    };
+) -> Result<(WriteStats, Memory)> {
+    let image = &plan.input.map.image;
+    let mut sink = Memory::new(image.width, image.height, plan.grid.len());
     let t1 = Instant::now();
     // Batches of 16 rows: what the writer's ZIP blocks hold (the values do not depend on it).
     let tally = stream_spectra(plan, cells, &mut sink, 16, progress)?;
-    Ok((stats(per_pixel, 0, tally, t1, 0.0), sink.data))
+    let per_pixel = channel_names(plan).len();
+    Ok((stats(per_pixel, 0, tally, t1, 0.0), sink))
 }
 
 /// The statistics of a write that counted `tally` and wrote `bytes`.
@@ -320,31 +317,87 @@ impl Sink for SpectralWriter {
     }
 }
 
-/// The whole image in memory, each pixel's channels interleaved.
-struct Memory {
+/// The whole image in memory as three planes, so that a caller takes each as it is: every
+/// pixel's bands, its R, G, B, and its sun mask ([`channel_names`]' order split).
+pub(crate) struct Memory {
     width: usize,
-    channels: usize,
-    data: Vec<f32>,
+    bands: usize,
+    /// `bands` values per pixel, row by row.
+    pub(crate) spectra: Vec<f32>,
+    /// R, G, B per pixel, row by row.
+    pub(crate) rgb: Vec<f32>,
+    /// The sun mask per pixel, row by row.
+    pub(crate) sun: Vec<f32>,
+}
+
+/// One row of [`Memory`]'s three planes.
+type MemoryRow<'a> = ((&'a mut [f32], &'a mut [f32]), &'a mut [f32]);
+
+impl Memory {
+    fn new(width: usize, height: usize, bands: usize) -> Memory {
+        Memory {
+            width,
+            bands,
+            spectra: vec![0.0; width * height * bands],
+            rgb: vec![0.0; width * height * 3],
+            sun: vec![0.0; width * height],
+        }
+    }
+
+    /// Rows `y0..y0 + count` of the three planes, a row at a time, to fill in parallel.
+    fn rows_mut(
+        &mut self,
+        y0: usize,
+        count: usize,
+    ) -> impl IndexedParallelIterator<Item = MemoryRow<'_>> {
+        // Rows y0.. of a plane of `per` values a pixel, one chunk a row.
+        fn rows(
+            plane: &mut [f32],
+            y0: usize,
+            count: usize,
+            w: usize,
+            per: usize,
+        ) -> ChunksMut<'_, f32> {
+            plane[y0 * w * per..(y0 + count) * w * per].par_chunks_mut(w * per)
+        }
+        let w = self.width;
+        rows(&mut self.spectra, y0, count, w, self.bands)
+            .zip(rows(&mut self.rgb, y0, count, w, 3))
+            .zip(rows(&mut self.sun, y0, count, w, 1))
+    }
 }
 
 impl Sink for Memory {
     fn rows(&mut self, y0: usize, rows: &[f32]) -> Result<()> {
-        let start = y0 * self.width * self.channels;
-        self.data[start..start + rows.len()].copy_from_slice(rows);
+        let (width, b) = (self.width, self.bands);
+        let per = b + 4;
+        let count = rows.len() / (width * per);
+        self.rows_mut(y0, count)
+            .zip(rows.par_chunks(width * per))
+            .for_each(|(((s, c), m), src)| {
+                for (x, p) in src.chunks_exact(per).enumerate() {
+                    s[x * b..(x + 1) * b].copy_from_slice(&p[..b]);
+                    c[x * 3..x * 3 + 3].copy_from_slice(&p[b..b + 3]);
+                    m[x] = p[b + 3];
+                }
+            });
         Ok(())
     }
     fn lines(&mut self, y0: usize, count: usize, src: &dyn LineSource) -> Result<()> {
-        let (width, channels) = (self.width, self.channels);
-        let start = y0 * width * channels;
-        self.data[start..start + count * width * channels]
-            .par_chunks_mut(width * channels)
+        let (width, b) = (self.width, self.bands);
+        self.rows_mut(y0, count)
             .enumerate()
-            .for_each(|(r, row)| {
+            .for_each(|(r, ((s, c), m))| {
                 let mut line = vec![0f32; width];
-                for c in 0..channels {
-                    src.line(c, r, &mut line);
+                for channel in 0..b + 4 {
+                    src.line(channel, r, &mut line);
+                    let (plane, per, k) = match channel {
+                        ch if ch < b => (&mut *s, b, ch),
+                        ch if ch < b + 3 => (&mut *c, 3, ch - b),
+                        _ => (&mut *m, 1, 0),
+                    };
                     for (x, &v) in line.iter().enumerate() {
-                        row[x * channels + c] = v;
+                        plane[x * per + k] = v;
                     }
                 }
             });
@@ -521,21 +574,28 @@ mod tests {
     }
 
     #[test]
-    fn memory_holds_lines_and_rows_pixel_interleaved_where_they_belong() {
-        let (width, channels) = (3, 2);
-        let mut m = Memory {
-            width,
-            channels,
-            data: vec![-1.0; 4 * width * channels],
-        };
+    fn memory_holds_lines_and_rows_in_their_planes_where_they_belong() {
+        // Two bands, then R, G, B and the sun mask: six channels.
+        let (width, bands) = (3, 2);
+        let mut m = Memory::new(width, 4, bands);
+        m.spectra.fill(-1.0);
         // Rows 1 and 2 as lines (rows counted from the source's first), row 3 as interleaved.
         m.lines(1, 2, &Ramp).unwrap();
-        m.rows(3, &[7.0; 6]).unwrap();
-        let at = |y: usize, x: usize, c: usize| m.data[(y * width + x) * channels + c];
+        let row3: Vec<f32> = (0..width * 6).map(|i| (i % 6) as f32 + 0.5).collect();
+        m.rows(3, &row3).unwrap();
+        let at = |y: usize, x: usize, c: usize| match c {
+            c if c < bands => m.spectra[(y * width + x) * bands + c],
+            c if c < bands + 3 => m.rgb[(y * width + x) * 3 + c - bands],
+            _ => m.sun[y * width + x],
+        };
         assert_eq!(at(0, 2, 1), -1.0, "row 0 untouched");
         assert_eq!(at(1, 2, 1), 12.0);
         assert_eq!(at(2, 0, 0), 100.0);
         assert_eq!(at(2, 1, 1), 111.0);
-        assert_eq!(at(3, 2, 1), 7.0);
+        assert_eq!(at(2, 1, 4), 141.0, "B");
+        assert_eq!(at(2, 0, 5), 150.0, "the sun mask");
+        for c in 0..6 {
+            assert_eq!(at(3, 2, c), c as f32 + 0.5);
+        }
     }
 }
