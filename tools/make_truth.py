@@ -41,6 +41,14 @@ Scenes (128x64 lat-long, OpenEXR orientation: Y up, the centre column looks down
   sodium lamps (specmap's `hps`) on 7 m poles, 15 m apart, alternating sides, each a 0.3 m sphere
   that emits downwards only (inverse-square, cosine law, no occlusion: the street is convex), under
   a dark sky glowing with sodium light at 1% of the road's luminance. 4x4 samples per pixel.
+- `office_mixed`, `office_warm_tubes`, `street_mixed`, `room_incandescent_dusk`,
+  `yard_overcast`: scenes of several lights of different kinds (tools/truth_mixed.py, whose
+  header describes them).
+- `studio_led`, `studio_tungsten`, `studio_flash`, `room_window_lamps`, `street_dusk`: scenes of
+  the kinds real users' HDRIs show (tools/truth_studio.py, whose header describes them): a
+  photographic studio with no sky under phosphor LED, tungsten or xenon-flash softboxes, a living
+  room with a daylight window and warm LED lamps, a dusk street of sodium and LED lamps under a
+  bright twilight sky.
 
 Wavelengths: 5 nm bands. Mitsuba's spectral sunsky data are tabulated at 320, 360, ..., 720 nm
 and interpolated linearly between; it returns NaN at exactly 720 nm and 0 beyond. So the skies
@@ -488,7 +496,9 @@ def street_scene():
 
 def main():
     import truth_mixed  # noqa: F401  (the multi-light scenes; it imports this module's helpers)
+    import truth_studio  # noqa: F401  (studios, a living room, a dusk street: issue 41)
     globals()["truth_mixed"] = truth_mixed
+    globals()["truth_studio"] = truth_studio
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--out", type=pathlib.Path, default=ROOT / "tests" / "data" / "truth")
     ap.add_argument("--only", nargs="*", help="scene names to (re)generate")
@@ -497,6 +507,7 @@ def main():
     names = [f"sky_e{e:02d}_t{t}" for e in SKY_ELEVATIONS for t in SKY_TURBIDITIES]
     names += ["interior_fl2", "interior_fl11", "street_hps"]
     names += list(truth_mixed.SCENES)
+    names += list(truth_studio.SCENES)
     wanted = args.only or names
     unknown = set(wanted) - set(names)
     if unknown:
@@ -520,6 +531,8 @@ def main():
             wl, radiance, params = interior_scene(name.split("_")[1].upper())
         elif name in truth_mixed.SCENES:
             wl, radiance, params = truth_mixed.SCENES[name]()
+        elif name in truth_studio.SCENES:
+            wl, radiance, params = truth_studio.SCENES[name]()
         else:
             wl, radiance, params = street_scene()
         manifest[name] = write_scene(args.out, name, wl, radiance, params)

@@ -29,7 +29,12 @@ RIGHT = {"interior_fl2": "FL2", "interior_fl11": "FL11", "street_hps": "hps",
          # The scenes of several lights: the light of the most energy (the tubes, the sodium
          # lamps, the bulbs as A), or daylight.
          "office_mixed": "FL11", "office_warm_tubes": "FL11", "street_mixed": "hps", "room_incandescent_dusk": "A",
-         "yard_overcast": "D65"}
+         "yard_overcast": "D65",
+         # Issue 41's scenes: the catalogue's nearest to the softboxes' phosphor-led (6814 K) is
+         # LED-B5 (6598 K); tungsten is A; a xenon flash and the living room's window are
+         # daylight; the dusk street's light is mostly sodium.
+         "studio_led": "LED-B5", "studio_tungsten": "A", "studio_flash": "D65",
+         "room_window_lamps": "D65", "street_dusk": "hps"}
 # paper/exact/nonneg keep the paper's sun (D65), sky (the light's basis) and, with a named light,
 # its white premise (RGB (1,1,1) is the main light), so these are the methods as they were.
 CONFIGS = [
