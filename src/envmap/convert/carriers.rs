@@ -205,8 +205,9 @@ pub struct CarrierEngine {
 pub enum SunSpec {
     /// No sun in the map.
     None,
-    /// The daylight of this true RGB (the sun's colour), exactly; a Planckian radiator of its
-    /// CCT times a smooth modulation where daylight would go negative (a red sun).
+    /// The daylight of this true RGB (the sun's colour), exactly; where daylight would go
+    /// negative (a red sun), the low sun of its CCT ([`illuminant::low_sun`], below 4000 K) or a
+    /// Planckian radiator (above) times a modulation to the colour.
     Colour {
         /// The sun's colour as true linear RGB (referenced to the space's white).
         rgb: [f64; 3],
@@ -398,8 +399,14 @@ fn sun_spd(
                     return Ok(Some((s, d.rgb * a / y)));
                 }
             }
-            // Warmer than daylight reaches: a black body of its CCT, modulated to its colour.
-            let p = c.light("a Planckian sun", &illuminant::planckian(*cct_k)?)?;
+            // Warmer than daylight reaches: a carrier of its CCT modulated to its colour; the low
+            // sun (sunlight through the atmosphere) below 4000 K, a black body above, where a
+            // colour off the daylight family's reach is no low sun.
+            let p = if illuminant::natural_is_low_sun(*cct_k) {
+                c.light("the low sun", &illuminant::low_sun(*cct_k)?)?
+            } else {
+                c.light("a Planckian sun", &illuminant::planckian(*cct_k)?)?
+            };
             let mcc = crate::fit::PAPER_BASIS.map(|n| {
                 data::spectrum(n).map(|s| s.data.resample(c.grid(), Interpolation::SMOOTH))
             });
@@ -599,23 +606,62 @@ mod tests {
     }
 
     #[test]
-    fn a_red_sun_beyond_the_daylight_family_is_planckian_and_exact() {
+    fn a_red_sun_beyond_the_daylight_family_is_the_low_sun_and_exact() {
         let c = colorimeter();
+        let sun_of = |rgb: [f64; 3], cct_k: f64| {
+            CarrierEngine::new(
+                &c,
+                vec![carrier("D65", &c)],
+                true,
+                &SunSpec::Colour { rgb, cct_k },
+                WhitePremise::Space,
+                [1.0; 3],
+            )
+            .unwrap()
+        };
+        // A Planckian colour, beyond the daylight family at 1900 K: the low sun of its CCT times
+        // a modulation (the smooth quadratic or the paper's ColorChecker basis), no black body.
         let p = c
             .light("p", &illuminant::planckian(1900.0).unwrap())
             .unwrap();
         let rgb: [f64; 3] = c.rgb(&p).unwrap().into();
-        let e = CarrierEngine::new(
-            &c,
-            vec![carrier("D65", &c)],
-            true,
-            &SunSpec::Colour { rgb, cct_k: 1900.0 },
-            WhitePremise::Space,
-            [1.0; 3],
-        )
-        .unwrap();
+        let e = sun_of(rgb, 1900.0);
         let s = e.sun_spectrum().unwrap();
         assert!(s.iter().all(|&v| v >= 0.0));
+        let grid = *c.grid();
+        let ratio_to = |t: &Tabulated| -> Vec<f64> {
+            let r = t.resample(&grid, Interpolation::LIGHT);
+            (0..s.len()).map(|i| s[i] as f64 / r.values()[i]).collect()
+        };
+        let x = |i: usize| (grid.wavelength_nm(i) - SMOOTH_CENTRE_NM) / SMOOTH_HALF_WIDTH_NM;
+        let smooth: [Vec<f64>; 3] = [
+            (0..s.len()).map(|_| 1.0).collect(),
+            (0..s.len()).map(x).collect(),
+            (0..s.len()).map(|i| x(i) * x(i)).collect(),
+        ];
+        let paper = crate::fit::PAPER_BASIS.map(|n| {
+            let t = data::spectrum(n).unwrap().data;
+            t.resample(&grid, Interpolation::SMOOTH).values().to_vec()
+        });
+        // How far the ratio is from the span of a modulation's three functions (least squares).
+        let off_span = |r: &[f64], f: &[Vec<f64>; 3]| -> f64 {
+            let m: Matrix3<f64> =
+                Matrix3::from_fn(|a, b| (0..r.len()).map(|i| f[a][i] * f[b][i]).sum::<f64>());
+            let v: Vector3<f64> =
+                Vector3::from_fn(|a, _| (0..r.len()).map(|i| f[a][i] * r[i]).sum::<f64>());
+            let k = m.try_inverse().unwrap() * v;
+            let scale = r.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            (0..r.len())
+                .map(|i| (r[i] - (0..3).map(|a| k[a] * f[a][i]).sum::<f64>()).abs())
+                .fold(0.0, f64::max)
+                / scale
+        };
+        let low = ratio_to(&illuminant::low_sun(1900.0).unwrap());
+        let low_off = off_span(&low, &smooth).min(off_span(&low, &paper));
+        assert!(low_off < 1e-4, "{low_off}");
+        let bb = ratio_to(&illuminant::planckian(1900.0).unwrap());
+        let bb_off = off_span(&bb, &smooth).min(off_span(&bb, &paper));
+        assert!(bb_off > 100.0 * low_off, "{bb_off} {low_off}");
         let mut out = vec![0f32; c.grid().len()];
         let px = rgb.map(|v| 5000.0 * v as f32);
         let a = Assign {

@@ -931,11 +931,17 @@ mod tests {
 
     #[test]
     fn the_sun_gets_the_daylight_of_its_own_colour() {
-        // A low sun, warmer than CIE daylight's 4000 K: the family still reproduces its colour.
+        // A sun on the Planckian locus warmer than CIE daylight's 4000 K: the family still
+        // reproduces its colour (a low sun's own colour, above the locus, may take it negative).
         for k in [2700.0, 3500.0, 5000.0, 6504.0] {
             let (rgb, _) = {
                 let e = faithful("D65", FAITHFUL, SunSource::None);
-                rgb_and_values(&e, &illuminant::natural(k).unwrap())
+                let t = if k < illuminant::DAYLIGHT_RANGE_K.0 {
+                    illuminant::planckian(k)
+                } else {
+                    illuminant::natural(k)
+                };
+                rgb_and_values(&e, &t.unwrap())
             };
             let mean = rgb.map(|v| v as f64 * 1000.0);
             let e = faithful("D65", FAITHFUL, SunSource::DaylightFit(mean));

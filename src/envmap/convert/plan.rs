@@ -189,8 +189,16 @@ fn sun_table(scene: &Scene, choice: &SunSpd, analysis: &Analysis) -> Result<Opti
                 .try_inverse()
                 .unwrap_or_default()
                 * s.colour;
+            let label = if crate::illuminant::natural_is_low_sun(k) {
+                format!(
+                    "CIE daylight family, the sun's colour (CCT {k:.0} K); where daylight goes \
+                     negative, the low sun {k:.0} K modulated to it"
+                )
+            } else {
+                format!("CIE daylight family, the sun's colour (CCT {k:.0} K)")
+            };
             (
-                format!("CIE daylight family, the sun's colour (CCT {k:.0} K)"),
+                label,
                 crate::illuminant::natural(k)?,
                 SunSpec::Colour {
                     rgb: rgb.into(),
@@ -199,7 +207,9 @@ fn sun_table(scene: &Scene, choice: &SunSpd, analysis: &Analysis) -> Result<Opti
             )
         }
         SunSpd::Match => {
-            let label = if k < crate::illuminant::DAYLIGHT_RANGE_K.0 {
+            let label = if crate::illuminant::natural_is_low_sun(k) {
+                format!("low sun {k:.0} K")
+            } else if k < crate::illuminant::DAYLIGHT_RANGE_K.0 {
                 format!("Planckian {k:.0} K")
             } else {
                 format!(

@@ -50,8 +50,9 @@ pub enum LightKind {
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 #[serde(tag = "type", rename_all = "lowercase")]
 pub enum LightSpd {
-    /// The CIE daylight (S0, S1, S2) of the light's own colour (a Planckian radiator where the
-    /// colour is warmer than the daylight family reaches).
+    /// The CIE daylight (S0, S1, S2) of the light's own colour (the low sun, sunlight through the
+    /// atmosphere, where the colour is warmer than the daylight family reaches: see
+    /// [`crate::illuminant::natural`]).
     Daylight {
         /// Correlated colour temperature (K).
         cct_k: f64,
@@ -88,9 +89,13 @@ impl LightSpd {
         }
     }
 
-    /// The name the report gives it: `daylight 5200 K`, `FL11`, `Planckian 2700 K`.
+    /// The name the report gives it: `daylight 5200 K`, `low sun 1603 K` (daylight's choice
+    /// below 4000 K), `FL11`, `Planckian 2700 K`.
     pub fn label(&self) -> String {
         match self {
+            LightSpd::Daylight { cct_k } if crate::illuminant::natural_is_low_sun(*cct_k) => {
+                format!("low sun {cct_k:.0} K")
+            }
             LightSpd::Daylight { cct_k } => format!("daylight {cct_k:.0} K"),
             LightSpd::Table { name } => name.clone(),
             LightSpd::Planckian { cct_k } => format!("Planckian {cct_k:.0} K"),
