@@ -30,6 +30,7 @@
 
 use super::cells::Cells;
 use super::emitters::{Emitter, Levels};
+use super::enclosure::{split_surface, surface_reason, Indoors, WINDOW_BLUE_K};
 use super::families::{match_lamp, LampMatch};
 use super::regions::{components, RegionStats};
 use super::{Light, LightKind, LightSpd, SceneSettings};
@@ -66,6 +67,9 @@ pub(crate) const LIT_BY_WINDOW: f64 = 20.0;
 pub(crate) const NIGHT_SKY_CONTRAST: f64 = 1e-3;
 /// A daylight region reaching this elevation (degrees above the horizon) is the sky, not a window.
 pub(crate) const SKY_TOP_DEG: f64 = 60.0;
+/// In a map with an enclosure, a bright region is sky only if its core (within a tenth of its
+/// peak) covers this fraction of it or more: a sky is smooth.
+pub(crate) const SKY_SMOOTH: f64 = 0.25;
 /// A daylight region covering this solid angle (sr) is the sky, however low.
 pub(crate) const SKY_LARGE_SR: f64 = 1.0;
 /// CIE 1960 uv distance within which a colour matches: a lamp's white (in daylight, an emitter
@@ -83,6 +87,9 @@ pub(crate) const LIT_COLOUR_UV: f64 = 0.05;
 pub(crate) const LAMP_CORE: f64 = 0.25;
 /// Emitters holding less of the energy than this are left to the reflectors (glints, noise).
 pub(crate) const MIN_LIGHT_SHARE: f64 = 1e-4;
+/// A lamp holding less of the energy than this is too small and faint to matter: its pixels are
+/// left to the reflectors around it (a glint in a tree, a star, an indicator light).
+pub(crate) const MIN_LAMP_SHARE: f64 = 5e-4;
 /// At most this many emitters are classified (the most energetic).
 pub(crate) const MAX_EMITTERS: usize = 256;
 
@@ -148,6 +155,8 @@ pub(crate) struct Classified {
 struct Candidate {
     e: Emitter,
     colour: Colour,
+    /// A bright core inside a surface of an enclosure (a softbox, a panel): never sky.
+    core: bool,
 }
 
 /// Classifies the emitters of a scene (brightest peak first) and finds its dim skies: the
@@ -158,27 +167,30 @@ pub(crate) fn classify(
     emitters: Vec<Emitter>,
     settings: &SceneSettings,
 ) -> Result<Classified> {
-    let candidates = candidates_of(levels, emitters)?;
-    let mut taken = vec![false; candidates.len()];
-    let mut daylight: Vec<(usize, LightKind)> = (0..candidates.len())
-        .filter(|&k| is_window(&candidates[k]))
-        .map(|k| (k, kind_of(&candidates[k].e.stats)))
-        .collect();
-    let lamp_whites: Vec<Colour> = (0..candidates.len())
-        .filter(|k| !daylight.iter().any(|d| d.0 == *k))
-        .map(|k| candidates[k].colour)
-        .collect();
-    let window_colours: Vec<(Colour, f64)> = daylight
-        .iter()
-        .map(|&(k, _)| (candidates[k].colour, candidates[k].e.stats.mean_xyz[1]))
-        .collect();
-    let dim = dim_skies(cells, &candidates, &lamp_whites, &window_colours)?;
-    let sun = sun_of(
-        &candidates,
+    let mut indoors = Indoors::default();
+    let candidates = open_enclosures(
+        cells,
         levels,
-        !daylight.is_empty() || !dim.is_empty(),
+        candidates_of(levels, emitters)?,
         settings,
-    );
+        &mut indoors,
+    )?;
+    let mut taken = vec![false; candidates.len()];
+    let Daylight {
+        mut daylight,
+        dim,
+        inside,
+    } = find_daylight(cells, &candidates, &mut indoors)?;
+    let sun = if inside {
+        Err("the map is inside an enclosure with no sky in view".to_string())
+    } else {
+        sun_of(
+            &candidates,
+            levels,
+            !daylight.is_empty() || !dim.is_empty(),
+            settings,
+        )
+    };
     let mut out = Classified::default();
     let sun_index = sun.as_ref().ok().copied();
     if let Some(k) = sun_index {
@@ -199,6 +211,7 @@ pub(crate) fn classify(
         daylight_level: daylight_level(cells, &candidates, &daylight, &dim),
         sun: sun_index.map(|k| candidates[k].colour),
         sky: !sky_cells.is_empty(),
+        inside,
     };
     let free: Vec<&Candidate> = (0..candidates.len())
         .filter(|&k| !taken[k])
@@ -220,6 +233,87 @@ pub(crate) fn classify(
     if let (Err(why), Some(_)) = (&sun, candidates.first()) {
         out.bright_reflectors.insert(0, format!("no sun: {why}"));
     }
+    out.bright_reflectors.extend(indoors.surfaces);
+    Ok(out)
+}
+
+/// The daylight among the candidates (each with its kind), the dim skies, and whether the map is
+/// inside an enclosure with no sky in view (see [`indoor_daylight`] and
+/// [`outshining_the_sky`] for the emitters that leave the daylight for the lamps).
+struct Daylight {
+    daylight: Vec<(usize, LightKind)>,
+    dim: Vec<Region>,
+    inside: bool,
+}
+
+fn find_daylight(
+    cells: &Cells,
+    candidates: &[Candidate],
+    indoors: &mut Indoors,
+) -> Result<Daylight> {
+    let mut daylight: Vec<(usize, LightKind)> = (0..candidates.len())
+        .filter(|&k| is_window(&candidates[k]))
+        .map(|k| match open_sky_shape(&candidates[k], indoors) {
+            true => (k, kind_of(&candidates[k].e.stats)),
+            false => (k, LightKind::Window),
+        })
+        .collect();
+    let lamp_whites: Vec<Colour> = (0..candidates.len())
+        .filter(|k| !daylight.iter().any(|d| d.0 == *k))
+        .map(|k| candidates[k].colour)
+        .collect();
+    let window_colours: Vec<(Colour, f64)> = daylight
+        .iter()
+        .map(|&(k, _)| (candidates[k].colour, candidates[k].e.stats.mean_xyz[1]))
+        .collect();
+    let dim = dim_skies(cells, candidates, &lamp_whites, &window_colours, indoors)?;
+    let inside = indoors.enclosed
+        && !daylight.iter().any(|d| d.1 == LightKind::Sky)
+        && !dim.iter().any(|d| kind_of(&d.stats) == LightKind::Sky);
+    if inside {
+        indoor_daylight(candidates, &mut daylight);
+    } else {
+        outshining_the_sky(cells, candidates, &dim, &mut daylight);
+    }
+    Ok(Daylight {
+        daylight,
+        dim,
+        inside,
+    })
+}
+
+/// The candidates with every surface of an enclosure (see [`super::enclosure`]) replaced by the
+/// bright cores inside it, brightest peak first; `indoors` records each surface. A map whose
+/// brightest emitter is a sun by its shape is outdoors and kept as it is.
+fn open_enclosures(
+    cells: &Cells,
+    levels: &Levels,
+    candidates: Vec<Candidate>,
+    settings: &SceneSettings,
+    indoors: &mut Indoors,
+) -> Result<Vec<Candidate>> {
+    if sun_of(&candidates, levels, true, settings).is_ok() {
+        indoors.outdoors = true;
+        return Ok(candidates);
+    }
+    let peaks: Vec<f64> = candidates.iter().map(|c| c.e.stats.peak).collect();
+    let mut out = Vec::new();
+    for (k, c) in candidates.into_iter().enumerate() {
+        let others = (peaks.iter().enumerate())
+            .filter(|&(j, _)| j != k)
+            .map(|(_, &p)| p)
+            .fold(0f64, f64::max);
+        match split_surface(cells, levels, &c.e, others) {
+            Some((cores, why)) => {
+                indoors.enclosed = true;
+                indoors.surfaces.push(why);
+                let cores = candidates_of(levels, cores)?;
+                out.extend(cores.into_iter().map(|c| Candidate { core: true, ..c }));
+            }
+            None => out.push(c),
+        }
+    }
+    out.sort_by(|a, b| b.e.stats.peak.total_cmp(&a.e.stats.peak));
     Ok(out)
 }
 
@@ -281,6 +375,7 @@ fn candidates_of(levels: &Levels, emitters: Vec<Emitter>) -> Result<Vec<Candidat
             Ok(Candidate {
                 colour: Colour::of(e.colour)?,
                 e,
+                core: false,
             })
         })
         .collect()
@@ -354,15 +449,27 @@ fn lamp_lights(
     };
     let lamps: Vec<&Candidate> = free.iter().copied().filter(|c| !sky_patch(c)).collect();
     let lamp_peak = lamps.iter().map(|c| c.e.stats.peak).fold(0f64, f64::max);
+    // (A core of an enclosure's surface is a lamp however much dimmer than the key light.)
     let lit_by_lamp = |c: &Candidate| {
-        c.e.stats.peak < LIT_BY_LAMP * lamp_peak
+        !c.core
+            && c.e.stats.peak < LIT_BY_LAMP * lamp_peak
             && lamps.iter().any(|l| {
                 l.e.stats.peak > c.e.stats.peak / LIT_BY_LAMP
                     && l.colour.uv_distance(&c.colour) <= LIT_COLOUR_UV
             })
     };
     for &c in free {
-        if lit_by_lamp(c) {
+        let share = c.e.stats.energy / levels.total_energy.max(f64::MIN_POSITIVE);
+        if share < MIN_LAMP_SHARE {
+            out.bright_reflectors.push(format!(
+                "a bright region ({} pixels, {:.1} degrees up, {}) holds {:.3}% of the energy: too \
+                 small and faint to matter, left to its surroundings",
+                c.e.cells.len(),
+                c.e.stats.elevation_deg(),
+                c.colour.describe(),
+                100.0 * share
+            ));
+        } else if lit_by_lamp(c) {
             out.bright_reflectors.push(format!(
                 "a bright region ({} pixels, {:.1} degrees up, {}) at {:.1e} of the brightest \
                  lamp's luminance and near a lamp's colour: a surface lamps light",
@@ -375,14 +482,80 @@ fn lamp_lights(
             sky_cells.extend(&c.e.cells);
         } else {
             match lamp_or_reflector(c, context, settings)? {
-                Ok(lamp) => out
-                    .lights
-                    .push(lamp_light(cells, levels, c, lamp, settings)),
+                Ok(lamp) => {
+                    out.lights
+                        .push(lamp_light(cells, levels, c, lamp, settings, context.inside))
+                }
                 Err(why) => out.bright_reflectors.push(why),
             }
         }
     }
     Ok(())
+}
+
+/// Inside an enclosure with no sky in view, a daylight-white emitter below [`WINDOW_BLUE_K`] is a
+/// lamp (a white lamp's CCT tops out near 7000 K; skylight through a window is bluer), and one
+/// at most [`LIT_BY_LAMP`] of the brightest lamp is a surface the lamps light: both leave
+/// `daylight` for the lamps' rules.
+fn indoor_daylight(candidates: &[Candidate], daylight: &mut Vec<(usize, LightKind)>) {
+    let peak = |k: usize| candidates[k].e.stats.peak;
+    let lamp = |k: usize| {
+        candidates[k]
+            .colour
+            .cct_k
+            .is_some_and(|t| t < WINDOW_BLUE_K)
+    };
+    let lamp_peak = (0..candidates.len())
+        .filter(|&k| lamp(k) || !daylight.iter().any(|d| d.0 == k))
+        .map(peak)
+        .fold(0f64, f64::max);
+    daylight.retain(|&(k, _)| !lamp(k) && peak(k) > LIT_BY_LAMP * lamp_peak);
+}
+
+/// With a sky in view, a daylight-white emitter smaller than a sky whose mean luminance is
+/// [`DAYLIGHT_LAMP_CONTRAST`] times the sky's bright parts (the 95th percentile of its cells) is
+/// a lamp (a cool LED street lamp at dusk), not a patch of sky or a window: it leaves `daylight`.
+fn outshining_the_sky(
+    cells: &Cells,
+    candidates: &[Candidate],
+    dim: &[Region],
+    daylight: &mut Vec<(usize, LightKind)>,
+) {
+    let skies: Vec<(usize, LightKind)> = (daylight.iter().copied())
+        .filter(|d| d.1 == LightKind::Sky)
+        .collect();
+    let dim_skies: Vec<&Region> = dim
+        .iter()
+        .filter(|d| kind_of(&d.stats) == LightKind::Sky)
+        .collect();
+    if skies.is_empty() && dim_skies.is_empty() {
+        return;
+    }
+    let mut y: Vec<f32> = (skies
+        .iter()
+        .flat_map(|&(k, _)| candidates[k].e.cells.iter()))
+    .chain(dim_skies.iter().flat_map(|d| d.cells.iter()))
+    .map(|&i| cells.y[i])
+    .collect();
+    y.sort_by(|a, b| a.total_cmp(b));
+    let level = y[(y.len() - 1) * 95 / 100] as f64;
+    daylight.retain(|&(k, kind)| {
+        kind == LightKind::Sky || candidates[k].e.stats.mean_xyz[1] < DAYLIGHT_LAMP_CONTRAST * level
+    });
+}
+
+/// Whether an emitter could be open sky by its shape: not a core inside an enclosure's surface,
+/// reaching above the horizon, and, in a map with an enclosure, wide ([`SKY_LARGE_SR`]) and smooth (its core, the cells
+/// within a tenth of its peak, [`SKY_SMOOTH`] of it or more): a softbox's glow on a ceiling is a
+/// bright blob and a lit strip of the ceiling is narrow; neither is sky, and a small opening is
+/// a window.
+fn open_sky_shape(c: &Candidate, indoors: &Indoors) -> bool {
+    let st = &c.e.stats;
+    !c.core
+        && st.top_elevation_deg > 0.0
+        && (!indoors.enclosed
+            || (c.e.core_solid_angle_sr >= SKY_SMOOTH * st.solid_angle_sr
+                && st.solid_angle_sr >= SKY_LARGE_SR))
 }
 
 /// A bright patch of daylight colour above the horizon, at least [`SKY_MIN_K`].
@@ -421,7 +594,9 @@ fn dim_skies(
     emitters: &[Candidate],
     lamp_whites: &[Colour],
     windows: &[(Colour, f64)],
+    indoors: &mut Indoors,
 ) -> Result<Vec<Region>> {
+    let brightest = emitters.iter().map(|c| c.e.stats.peak).fold(0f64, f64::max);
     let lamp_peak = emitters
         .iter()
         .filter(|c| !is_window(c))
@@ -445,6 +620,18 @@ fn dim_skies(
     for region in components(cells, &mask) {
         let stats = RegionStats::of(cells, &region);
         if stats.solid_angle_sr < SKY_MIN_SR {
+            continue;
+        }
+        let surface = (!indoors.outdoors)
+            .then(|| surface_reason(cells, &region, brightest))
+            .flatten();
+        if let Some(why) = surface {
+            indoors.enclosed = true;
+            indoors.surfaces.push(format!(
+                "a dim daylight-coloured region ({} pixels, {:.2} sr) is no sky: {why}",
+                region.len(),
+                stats.solid_angle_sr
+            ));
             continue;
         }
         let colour = Colour::of(stats.mean_xyz)?;
@@ -683,6 +870,8 @@ struct Context {
     /// The luminance of the sky's and windows' bright parts.
     daylight_level: f64,
     sun: Option<Colour>,
+    /// Inside an enclosure with no sky in view.
+    inside: bool,
 }
 
 /// A lamp's match, or why the emitter is a bright reflector instead.
@@ -730,7 +919,13 @@ fn lamp_light(
     c: &Candidate,
     m: LampMatch,
     settings: &SceneSettings,
+    inside: bool,
 ) -> Light {
+    let what = if inside && c.colour.daylight() {
+        "a daylight-white emitter inside an enclosure with no sky in view"
+    } else {
+        "an emitter not of daylight"
+    };
     let spd = match &settings.lamps {
         Some(name) => LightSpd::Table { name: name.clone() },
         None => match m.family {
@@ -748,14 +943,13 @@ fn lamp_light(
     };
     let reason = match &settings.lamps {
         Some(name) => format!(
-            "an emitter not of daylight; its spectrum is {name} (--light); its colour is nearest \
-             {} ({}, {:.4} uv)",
+            "{what}; its spectrum is {name} (--light); its colour is nearest {} ({}, {:.4} uv)",
             m.spd,
             m.family.name(),
             m.distance_uv
         ),
         None => format!(
-            "an emitter not of daylight ({}); {} ({}, {:.4} uv from its white: {})",
+            "{what} ({}); {} ({}, {:.4} uv from its white: {})",
             c.colour.describe(),
             m.spd,
             m.family.name(),

@@ -110,7 +110,7 @@ pub(crate) fn find(cells: &Cells, levels: &Levels) -> Vec<Emitter> {
     out
 }
 
-fn emitter(cells: &Cells, levels: &Levels, region: Vec<usize>) -> Emitter {
+pub(crate) fn emitter(cells: &Cells, levels: &Levels, region: Vec<usize>) -> Emitter {
     let stats = RegionStats::of(cells, &region);
     let core: Vec<usize> = region
         .iter()

@@ -8,14 +8,18 @@
 //!    level;
 //! 3. [`emitters::find`]: connected regions far brighter than the median, each with its core and
 //!    its colour (from the unclipped halo where the core is clipped);
-//! 4. [`classify`]: each emitter becomes the sun, a sky or window, a lamp (matched to a family,
+//! 4. [`enclosure`]: wide bright regions that go on below the horizon and that something
+//!    outshines are the walls of a room or studio, not sky; their bright cores (softboxes,
+//!    panels) are emitters of their own, and with no open sky in view the map is indoors;
+//! 5. [`classify`]: each emitter becomes the sun, a sky or window, a lamp (matched to a family,
 //!    [`families`]) or a bright reflector; daylight-coloured regions that no lamp explains become
 //!    sky or windows;
-//! 5. [`reflectors`]: the mix of lights that lights each remaining pixel.
+//! 6. [`reflectors`]: the mix of lights that lights each remaining pixel.
 
 pub(crate) mod cells;
 pub(crate) mod classify;
 pub(crate) mod emitters;
+pub(crate) mod enclosure;
 pub(crate) mod families;
 pub mod main_light;
 pub mod overlay;
