@@ -85,6 +85,10 @@ pub(crate) const LIT_BY_LAMP: f64 = 0.05;
 pub(crate) const LIT_COLOUR_UV: f64 = 0.05;
 /// A lamp's pixels are those at least this fraction of its peak luminance.
 pub(crate) const LAMP_CORE: f64 = 0.25;
+/// A sun blurred by a small map or haze has a core of this solid angle or less (sr).
+pub(crate) const BLURRED_SUN_SR: f64 = 0.05;
+/// The sky is at least this many times the sun's CCT.
+pub(crate) const SKY_BLUER: f64 = 1.1;
 /// Emitters holding less of the energy than this are left to the reflectors (glints, noise).
 pub(crate) const MIN_LIGHT_SHARE: f64 = 1e-4;
 /// A lamp holding less of the energy than this is too small and faint to matter: its pixels are
@@ -273,13 +277,38 @@ fn find_daylight(
     if inside {
         indoor_daylight(candidates, &mut daylight);
     } else {
-        outshining_the_sky(cells, candidates, &dim, &mut daylight);
+        outshining_the_sky(cells, candidates, &dim, indoors.blurred_sun, &mut daylight);
     }
     Ok(Daylight {
         daylight,
         dim,
         inside,
     })
+}
+
+/// Whether the brightest emitter is a sun seen through blur or haze: unique, of a daylight or
+/// Planckian colour, its core at most [`BLURRED_SUN_SR`], under an upper hemisphere (its cells
+/// outside every emitter) [`SKY_BLUER`] times its CCT or bluer. Scattered skylight is bluer than
+/// the sun; the walls a lamp lights have the lamp's colour or a warmer one.
+fn sun_under_a_bluer_sky(cells: &Cells, candidates: &[Candidate]) -> Result<bool> {
+    let Some(c) = candidates.first() else {
+        return Ok(false);
+    };
+    let sun_like = unique(c, &candidates[1..])
+        && c.colour.duv.abs() <= SUN_MAX_DUV
+        && c.e.core_solid_angle_sr <= BLURRED_SUN_SR;
+    let Some(sun_k) = c.colour.cct_k.filter(|_| sun_like) else {
+        return Ok(false);
+    };
+    let mut in_emitter = vec![false; cells.len()];
+    for &i in candidates.iter().flat_map(|c| c.e.cells.iter()) {
+        in_emitter[i] = true;
+    }
+    let sky: Vec<usize> = (0..cells.len())
+        .filter(|&i| !in_emitter[i] && cells.direction(i)[1] > 0.0)
+        .collect();
+    let sky = Colour::of(RegionStats::of(cells, &sky).mean_xyz)?;
+    Ok(sky.cct_k.is_some_and(|k| k >= SKY_BLUER * sun_k))
 }
 
 /// The candidates with every surface of an enclosure (see [`super::enclosure`]) replaced by the
@@ -292,7 +321,8 @@ fn open_enclosures(
     settings: &SceneSettings,
     indoors: &mut Indoors,
 ) -> Result<Vec<Candidate>> {
-    if sun_of(&candidates, levels, true, settings).is_ok() {
+    indoors.blurred_sun = sun_under_a_bluer_sky(cells, &candidates)?;
+    if indoors.blurred_sun || sun_of(&candidates, levels, true, settings).is_ok() {
         indoors.outdoors = true;
         return Ok(candidates);
     }
@@ -514,11 +544,13 @@ fn indoor_daylight(candidates: &[Candidate], daylight: &mut Vec<(usize, LightKin
 
 /// With a sky in view, a daylight-white emitter smaller than a sky whose mean luminance is
 /// [`DAYLIGHT_LAMP_CONTRAST`] times the sky's bright parts (the 95th percentile of its cells) is
-/// a lamp (a cool LED street lamp at dusk), not a patch of sky or a window: it leaves `daylight`.
+/// a lamp (a cool LED street lamp at dusk), not a patch of sky or a window: it leaves `daylight`
+/// (a blurred sun, the brightest candidate, stays).
 fn outshining_the_sky(
     cells: &Cells,
     candidates: &[Candidate],
     dim: &[Region],
+    blurred_sun: bool,
     daylight: &mut Vec<(usize, LightKind)>,
 ) {
     let skies: Vec<(usize, LightKind)> = (daylight.iter().copied())
@@ -540,7 +572,9 @@ fn outshining_the_sky(
     y.sort_by(|a, b| a.total_cmp(b));
     let level = y[(y.len() - 1) * 95 / 100] as f64;
     daylight.retain(|&(k, kind)| {
-        kind == LightKind::Sky || candidates[k].e.stats.mean_xyz[1] < DAYLIGHT_LAMP_CONTRAST * level
+        kind == LightKind::Sky
+            || (k == 0 && blurred_sun)
+            || candidates[k].e.stats.mean_xyz[1] < DAYLIGHT_LAMP_CONTRAST * level
     });
 }
 

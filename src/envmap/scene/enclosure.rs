@@ -51,6 +51,8 @@ pub(crate) struct Indoors {
     /// The brightest emitter is a sun by its shape: the map is outdoors, and no region is
     /// judged a surface of an enclosure.
     pub outdoors: bool,
+    /// The brightest emitter is a sun seen through blur or haze under a bluer sky.
+    pub blurred_sun: bool,
 }
 
 /// How a region meets the horizon: the fraction of its cells in the row just above the horizon
