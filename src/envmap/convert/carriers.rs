@@ -205,9 +205,11 @@ pub struct CarrierEngine {
 pub enum SunSpec {
     /// No sun in the map.
     None,
-    /// The daylight of this true RGB (the sun's colour), exactly; where daylight would go
-    /// negative (a red sun), the low sun of its CCT ([`illuminant::low_sun`], below 4000 K) or a
-    /// Planckian radiator (above) times a modulation to the colour.
+    /// The daylight of this true RGB (the sun's colour), exactly; a Planckian radiator of its
+    /// CCT times a smooth modulation where daylight would go negative (a red sun). The low sun
+    /// ([`illuminant::low_sun`]) is not used here: modulated to the colour, the black body
+    /// renders Mitsuba 3's low suns better (mean CIEDE2000 0.42 against 0.46 over 15 suns,
+    /// tests/interop/test_low_sun.py) and the 5-degree truth skies 0.24 against 0.26.
     Colour {
         /// The sun's colour as true linear RGB (referenced to the space's white).
         rgb: [f64; 3],
@@ -402,11 +404,7 @@ fn sun_spd(
             // Warmer than daylight reaches: a carrier of its CCT modulated to its colour; the low
             // sun (sunlight through the atmosphere) below 4000 K, a black body above, where a
             // colour off the daylight family's reach is no low sun.
-            let p = if illuminant::natural_is_low_sun(*cct_k) {
-                c.light("the low sun", &illuminant::low_sun(*cct_k)?)?
-            } else {
-                c.light("a Planckian sun", &illuminant::planckian(*cct_k)?)?
-            };
+            let p = c.light("a Planckian sun", &illuminant::planckian(*cct_k)?)?;
             let mcc = crate::fit::PAPER_BASIS.map(|n| {
                 data::spectrum(n).map(|s| s.data.resample(c.grid(), Interpolation::SMOOTH))
             });
@@ -606,7 +604,7 @@ mod tests {
     }
 
     #[test]
-    fn a_red_sun_beyond_the_daylight_family_is_the_low_sun_and_exact() {
+    fn a_red_sun_beyond_the_daylight_family_is_a_modulated_black_body_and_exact() {
         let c = colorimeter();
         let sun_of = |rgb: [f64; 3], cct_k: f64| {
             CarrierEngine::new(
@@ -619,8 +617,8 @@ mod tests {
             )
             .unwrap()
         };
-        // A Planckian colour, beyond the daylight family at 1900 K: the low sun of its CCT times
-        // a modulation (the smooth quadratic or the paper's ColorChecker basis), no black body.
+        // A Planckian colour, beyond the daylight family at 1900 K: a black body of its CCT times
+        // a modulation (the smooth quadratic or the paper's ColorChecker basis).
         let p = c
             .light("p", &illuminant::planckian(1900.0).unwrap())
             .unwrap();
@@ -656,12 +654,9 @@ mod tests {
                 .fold(0.0, f64::max)
                 / scale
         };
-        let low = ratio_to(&illuminant::low_sun(1900.0).unwrap());
-        let low_off = off_span(&low, &smooth).min(off_span(&low, &paper));
-        assert!(low_off < 1e-4, "{low_off}");
         let bb = ratio_to(&illuminant::planckian(1900.0).unwrap());
         let bb_off = off_span(&bb, &smooth).min(off_span(&bb, &paper));
-        assert!(bb_off > 100.0 * low_off, "{bb_off} {low_off}");
+        assert!(bb_off < 1e-4, "{bb_off}");
         let mut out = vec![0f32; c.grid().len()];
         let px = rgb.map(|v| 5000.0 * v as f32);
         let a = Assign {

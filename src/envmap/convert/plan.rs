@@ -192,7 +192,7 @@ fn sun_table(scene: &Scene, choice: &SunSpd, analysis: &Analysis) -> Result<Opti
             let label = if crate::illuminant::natural_is_low_sun(k) {
                 format!(
                     "CIE daylight family, the sun's colour (CCT {k:.0} K); where daylight goes \
-                     negative, the low sun {k:.0} K modulated to it"
+                     negative, a black body of {k:.0} K modulated to it"
                 )
             } else {
                 format!("CIE daylight family, the sun's colour (CCT {k:.0} K)")
