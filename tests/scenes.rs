@@ -179,7 +179,8 @@ fn clipped_ceiling_spots_are_lamps_of_their_halos_colour() {
     }
 }
 
-/// A night street with four sodium lamps: none of them is taken for the sun, each is sodium.
+/// A night street with four sodium lamps: none of them is taken for the sun, each is sodium; the
+/// sodium-lit sky above is a night sky.
 #[test]
 fn four_sodium_lamps_are_sodium_lamps_not_a_sun() {
     let sodium = specmap::envmap::scene::main_light::white_xy("hps").unwrap();
@@ -200,12 +201,17 @@ fn four_sodium_lamps_are_sodium_lamps_not_a_sun() {
     let text = describe(&s);
     assert!(s.sun().is_none(), "{text}");
     assert_eq!(kinds(&s, LightKind::Lamp), 4, "{text}");
-    for l in &s.lights {
+    for l in s.lights.iter().filter(|l| l.kind == LightKind::Lamp) {
         assert_eq!(
             l.lamp.as_ref().unwrap().family,
             Family::HighPressureSodium,
             "{text}"
         );
+    }
+    // The sodium glow of the sky over a city is a night sky (issue 41), one light, of its colour.
+    assert!(kinds(&s, LightKind::Sky) <= 1, "{text}");
+    for l in s.lights.iter().filter(|l| l.kind == LightKind::Sky) {
+        assert!(l.cct_k.is_some_and(|k| k < 2400.0), "{text}");
     }
 }
 

@@ -85,6 +85,15 @@ pub(crate) const LIT_BY_LAMP: f64 = 0.05;
 pub(crate) const LIT_COLOUR_UV: f64 = 0.05;
 /// A lamp's pixels are those at least this fraction of its peak luminance.
 pub(crate) const LAMP_CORE: f64 = 0.25;
+/// A glow touching a twilight sky joins it when its core covers this solid angle (sr) or more:
+/// a lamp's core is far smaller.
+pub(crate) const GLOW_MIN_SR: f64 = 0.01;
+/// A glow joins a twilight sky at most this many times the sky's median luminance: the
+/// afterglow over the sunset (about 100 times the sky at the zenith), not a lamp.
+pub(crate) const GLOW_CONTRAST: f64 = 200.0;
+/// A window holding this share of the map's energy shows the map is a room: its sky is seen
+/// through it, and what is grown from the zenith is a ceiling.
+pub(crate) const ROOM_WINDOW_SHARE: f64 = 0.01;
 /// A sun blurred by a small map or haze has a core of this solid angle or less (sr).
 pub(crate) const BLURRED_SUN_SR: f64 = 0.05;
 /// The sky is at least this many times the sun's CCT.
@@ -184,7 +193,8 @@ pub(crate) fn classify(
         mut daylight,
         dim,
         inside,
-    } = find_daylight(cells, &candidates, &mut indoors)?;
+        twilight,
+    } = find_daylight(cells, levels, &candidates, &mut indoors)?;
     let sun = if inside {
         Err("the map is inside an enclosure with no sky in view".to_string())
     } else {
@@ -231,7 +241,7 @@ pub(crate) fn classify(
         &mut out,
     )?;
     if !sky_cells.is_empty() {
-        let light = sky_light(cells, levels, sky_cells)?;
+        let light = sky_light(cells, levels, sky_cells, twilight)?;
         out.lights.insert(sun_index.is_some() as usize, light);
     }
     if let (Err(why), Some(_)) = (&sun, candidates.first()) {
@@ -248,10 +258,13 @@ struct Daylight {
     daylight: Vec<(usize, LightKind)>,
     dim: Vec<Region>,
     inside: bool,
+    /// The sky is a twilight or night sky ([`twilight_sky`]).
+    twilight: bool,
 }
 
 fn find_daylight(
     cells: &Cells,
+    levels: &Levels,
     candidates: &[Candidate],
     indoors: &mut Indoors,
 ) -> Result<Daylight> {
@@ -270,7 +283,12 @@ fn find_daylight(
         .iter()
         .map(|&(k, _)| (candidates[k].colour, candidates[k].e.stats.mean_xyz[1]))
         .collect();
-    let dim = dim_skies(cells, candidates, &lamp_whites, &window_colours, indoors)?;
+    let mut dim = dim_skies(cells, candidates, &lamp_whites, &window_colours, indoors)?;
+    let no_sky = !daylight.iter().any(|d| d.1 == LightKind::Sky)
+        && !dim.iter().any(|d| kind_of(&d.stats) == LightKind::Sky);
+    let twilight = no_sky
+        && !indoors.enclosed
+        && twilight_sky(cells, levels, candidates, &mut daylight, &mut dim)?;
     let inside = indoors.enclosed
         && !daylight.iter().any(|d| d.1 == LightKind::Sky)
         && !dim.iter().any(|d| kind_of(&d.stats) == LightKind::Sky);
@@ -283,7 +301,74 @@ fn find_daylight(
         daylight,
         dim,
         inside,
+        twilight,
     })
+}
+
+/// Where the daylight rules found no sky and no window shows daylight ([`ROOM_WINDOW_SHARE`]):
+/// the twilight or night sky grown from the zenith ([`super::twilight`]) joins `dim`, and its
+/// glows join `daylight` as sky: the emitters touching it above the horizon with cores of
+/// [`GLOW_MIN_SR`] or more, at most [`GLOW_CONTRAST`] times its median luminance, of a colour
+/// with a CCT (the afterglow, a city's sky glow). A region the other emitters light as lamps
+/// light walls ([`surface_reason`]) is a ceiling, not a sky. Whether a twilight sky was found.
+fn twilight_sky(
+    cells: &Cells,
+    levels: &Levels,
+    candidates: &[Candidate],
+    daylight: &mut Vec<(usize, LightKind)>,
+    dim: &mut Vec<Region>,
+) -> Result<bool> {
+    let window_share = (daylight.iter())
+        .map(|&(k, _)| candidates[k].e.stats.energy / levels.total_energy.max(f64::MIN_POSITIVE))
+        .fold(0f64, f64::max);
+    let mut in_emitter = vec![false; cells.len()];
+    for &i in candidates.iter().flat_map(|c| c.e.cells.iter()) {
+        in_emitter[i] = true;
+    }
+    let open = (window_share < ROOM_WINDOW_SHARE)
+        .then(|| super::twilight::open_sky(cells, &in_emitter))
+        .flatten();
+    let Some((region, stats)) = open else {
+        return Ok(false);
+    };
+    let median = super::enclosure::median_luminance(cells, &region);
+    let mut in_sky = vec![false; cells.len()];
+    for &i in &region {
+        in_sky[i] = true;
+    }
+    let glow = |c: &Candidate| {
+        c.e.stats.elevation_deg() > 0.0
+            && c.e.core_solid_angle_sr >= GLOW_MIN_SR
+            && c.e.stats.peak <= GLOW_CONTRAST * median
+            && c.colour.cct_k.is_some()
+            && (c.e.cells.iter()).any(|&i| cells.neighbours(i).any(|j| in_sky[j]))
+    };
+    let glows: Vec<usize> = (0..candidates.len())
+        .filter(|&k| glow(&candidates[k]))
+        .collect();
+    let lamps: Vec<&[usize]> = (0..candidates.len())
+        .filter(|k| !glows.contains(k))
+        .map(|k| candidates[k].e.cells.as_slice())
+        .collect();
+    let lit = surface_reason(cells, &region, &lamps).is_some();
+    if lit || Colour::of(stats.mean_xyz)?.cct_k.is_none() {
+        return Ok(false);
+    }
+    for k in glows {
+        if !daylight.iter().any(|d| d.0 == k) {
+            daylight.push((k, LightKind::Sky));
+        }
+    }
+    dim.push(Region {
+        cells: region,
+        stats,
+    });
+    Ok(true)
+}
+
+/// Each candidate's cells.
+fn emitter_cells(candidates: &[Candidate]) -> Vec<&[usize]> {
+    candidates.iter().map(|c| c.e.cells.as_slice()).collect()
 }
 
 /// Whether the brightest emitter is a sun seen through blur or haze: unique, of a daylight or
@@ -326,14 +411,16 @@ fn open_enclosures(
         indoors.outdoors = true;
         return Ok(candidates);
     }
-    let peaks: Vec<f64> = candidates.iter().map(|c| c.e.stats.peak).collect();
+    let splits: Vec<_> = (0..candidates.len())
+        .map(|k| {
+            let mut others = emitter_cells(&candidates);
+            others.remove(k);
+            split_surface(cells, levels, &candidates[k].e, &others)
+        })
+        .collect();
     let mut out = Vec::new();
-    for (k, c) in candidates.into_iter().enumerate() {
-        let others = (peaks.iter().enumerate())
-            .filter(|&(j, _)| j != k)
-            .map(|(_, &p)| p)
-            .fold(0f64, f64::max);
-        match split_surface(cells, levels, &c.e, others) {
+    for (c, split) in candidates.into_iter().zip(splits) {
+        match split {
             Some((cores, why)) => {
                 indoors.enclosed = true;
                 indoors.surfaces.push(why);
@@ -363,15 +450,20 @@ fn add_circumsolar_sky(
 }
 
 /// All the sky's cells as one light.
-fn sky_light(cells: &Cells, levels: &Levels, mut sky_cells: Vec<usize>) -> Result<Light> {
+fn sky_light(
+    cells: &Cells,
+    levels: &Levels,
+    mut sky_cells: Vec<usize>,
+    twilight: bool,
+) -> Result<Light> {
     sky_cells.sort_unstable();
-    daylight_light(
-        cells,
-        levels,
-        sky_cells,
-        LightKind::Sky,
-        "daylight-coloured, in the upper hemisphere, reaching high or wide".into(),
-    )
+    let why = match twilight {
+        true => {
+            "a twilight or night sky: open, from the zenith down to the horizon, its glow with it"
+        }
+        false => "daylight-coloured, in the upper hemisphere, reaching high or wide",
+    };
+    daylight_light(cells, levels, sky_cells, LightKind::Sky, why.into())
 }
 
 /// The luminance of the sky's and windows' bright parts: the 95th percentile of their cells.
@@ -630,7 +722,7 @@ fn dim_skies(
     windows: &[(Colour, f64)],
     indoors: &mut Indoors,
 ) -> Result<Vec<Region>> {
-    let brightest = emitters.iter().map(|c| c.e.stats.peak).fold(0f64, f64::max);
+    let lights = emitter_cells(emitters);
     let lamp_peak = emitters
         .iter()
         .filter(|c| !is_window(c))
@@ -657,7 +749,7 @@ fn dim_skies(
             continue;
         }
         let surface = (!indoors.outdoors)
-            .then(|| surface_reason(cells, &region, brightest))
+            .then(|| surface_reason(cells, &region, &lights))
             .flatten();
         if let Some(why) = surface {
             indoors.enclosed = true;

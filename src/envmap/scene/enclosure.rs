@@ -8,8 +8,10 @@
 //! 1. **it goes on below the horizon**: along [`CONTINUES_COLUMNS`] of its cells at the horizon,
 //!    the band under them (down to [`BAND_DEG`] below) is between [`CONTINUES`] and its inverse
 //!    times as bright as they are;
-//! 2. **something outshines it**: an emitter in the map, or a core inside the region, peaks at
-//!    [`OUTSHONE`] times the region's median luminance or more (a ceiling spot, a softbox).
+//! 2. **lamps light it**: emitters in the map, or cores inside the region, peak at [`OUTSHONE`]
+//!    times the region's median luminance or more (a ceiling spot, a softbox) and hold
+//!    [`LIT_SHARE`] of its energy (a star or a far street lamp cannot light a sky);
+//! 3. it covers [`MIN_SURFACE_SR`] or more.
 //!
 //! A surface of an enclosure is not a light. The bright cores inside one ([`CORE_CONTRAST`] times
 //! its level, the lower quartile of its luminance: softboxes, panels, spots) are emitters of their
@@ -20,7 +22,7 @@
 
 use super::cells::Cells;
 use super::emitters::{self, Emitter, Levels};
-use super::regions::components;
+use super::regions::{components, RegionStats};
 
 /// A region goes on below the horizon where the band under it is at least this fraction (and
 /// at most its inverse) of its luminance at the horizon.
@@ -33,6 +35,12 @@ pub(crate) const BAND_DEG: f64 = 8.0;
 pub(crate) const MIN_EDGE_CELLS: usize = 8;
 /// An emitter or core this many times the region's median luminance outshines it.
 pub(crate) const OUTSHONE: f64 = 30.0;
+/// The emitters that outshine a surface hold at least this fraction of its energy: lamps that
+/// light the walls (a wall lit by a lamp returns about rho / pi of the lamp's energy per sr), not
+/// a star or a far street lamp over a night sky.
+pub(crate) const LIT_SHARE: f64 = 0.1;
+/// A surface of an enclosure covers at least this solid angle (sr): a wall, not a patch.
+pub(crate) const MIN_SURFACE_SR: f64 = 0.25;
 /// The cores of an enclosure's surface are its cells this many times its level (the lower
 /// quartile of its luminance).
 pub(crate) const CORE_CONTRAST: f64 = 10.0;
@@ -104,18 +112,32 @@ fn luminance_quantile(cells: &Cells, region: &[usize], parts: usize) -> f64 {
     y[y.len() / parts] as f64
 }
 
-/// Why `region` is a surface of an enclosure (see the module), or None: it goes on below the
-/// horizon and `brightest` (the brightest peak of the map's other emitters, or its own) outshines it.
-pub(crate) fn surface_reason(cells: &Cells, region: &[usize], brightest: f64) -> Option<String> {
+/// Why `region` is a surface of an enclosure (see the module), or None. `others` are the cells
+/// of the map's other emitters; their cells and the region's own that outshine it count.
+pub(crate) fn surface_reason(
+    cells: &Cells,
+    region: &[usize],
+    others: &[&[usize]],
+) -> Option<String> {
+    let st = RegionStats::of(cells, region);
+    if st.solid_angle_sr < MIN_SURFACE_SR {
+        return None;
+    }
     let goes_on = continuation(cells, region)?;
-    let median = median_luminance(cells, region);
-    let contrast = brightest / median.max(1e-30);
-    (goes_on >= CONTINUES_COLUMNS && contrast >= OUTSHONE).then(|| {
+    let floor = OUTSHONE * median_luminance(cells, region);
+    let bright = (others.iter().copied().chain([region]).flatten())
+        .map(|&i| (cells.y[i] as f64, cells.omega(i)))
+        .filter(|&(y, _)| y >= floor);
+    let (peak, energy) = bright.fold((0f64, 0f64), |(p, e), (y, w)| (p.max(y), e + y * w));
+    let lit = energy >= LIT_SHARE * st.energy;
+    (goes_on >= CONTINUES_COLUMNS && peak > 0.0 && lit).then(|| {
         format!(
-            "it goes on below the horizon as bright along {:.0}% of its edge there, and an \
-             emitter {contrast:.0} times its median luminance outshines it: the walls of an \
-             enclosure",
-            100.0 * goes_on
+            "it goes on below the horizon as bright along {:.0}% of its edge there, and emitters \
+             up to {:.0} times its median luminance, holding {:.0}% of its energy, outshine it: \
+             the walls of an enclosure its lamps light",
+            100.0 * goes_on,
+            peak * OUTSHONE / floor,
+            100.0 * energy / st.energy
         )
     })
 }
@@ -126,9 +148,9 @@ pub(crate) fn split_surface(
     cells: &Cells,
     levels: &Levels,
     e: &Emitter,
-    others_peak: f64,
+    others: &[&[usize]],
 ) -> Option<(Vec<Emitter>, String)> {
-    let reason = surface_reason(cells, &e.cells, others_peak.max(e.stats.peak))?;
+    let reason = surface_reason(cells, &e.cells, others)?;
     let floor = CORE_CONTRAST * surface_level(cells, &e.cells);
     let mut mask = vec![false; cells.len()];
     for &i in &e.cells {
@@ -181,10 +203,22 @@ mod tests {
 
     #[test]
     fn a_wall_is_a_surface_only_when_something_outshines_it() {
-        let c = cells(1.0, 0.9);
         let upper: Vec<usize> = (0..16 * 64).collect();
-        assert!(surface_reason(&c, &upper, 5.0).is_none());
-        let why = surface_reason(&c, &upper, 100.0).unwrap();
+        // The region is 1.0 above the horizon, 0.9 below; lamps are painted over it.
+        let lamp = |c: &mut Cells, at: &[usize], y: f32| {
+            for &i in at {
+                c.y[i] = y;
+            }
+        };
+        let (small, big): (Vec<usize>, Vec<usize>) = ((0..2).collect(), (0..64).collect());
+        let mut c = cells(1.0, 0.9);
+        lamp(&mut c, &small, 5.0);
+        // A lamp not bright enough, a bright one too small to light it, one that lights it.
+        assert!(surface_reason(&c, &upper, &[&small]).is_none());
+        lamp(&mut c, &small, 100.0);
+        assert!(surface_reason(&c, &upper, &[&small]).is_none());
+        lamp(&mut c, &big, 100.0);
+        let why = surface_reason(&c, &upper, &[&big]).unwrap();
         assert!(why.contains("100 times"), "{why}");
     }
 }

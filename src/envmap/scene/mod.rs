@@ -26,6 +26,7 @@ pub mod overlay;
 pub mod reflectors;
 pub(crate) mod regions;
 pub mod sun;
+pub(crate) mod twilight;
 
 use crate::colorimetry::RgbSpace;
 use crate::envmap::layout::EnvMap;
