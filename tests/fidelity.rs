@@ -24,9 +24,12 @@ fn measure(dir: &Path, name: &str, opts: &ConvertOptions) -> Rendition {
     let out = dir.join(format!("{name}.exr"));
     let input = truth(name, "rgb");
     let report = convert(input.to_str().unwrap(), &out, opts, &|_, _| {}).unwrap();
-    // The round trip RGB -> SPD -> RGB stays exact (f64 maths before the half-float file).
+    // The round trip RGB -> SPD -> RGB stays exact (f64 maths before the half-float file), but
+    // for the pixels judged clipped, which get their lamp's SPD (a flash softbox's hot spot at
+    // the map's maximum is one: docs/scenes.md).
+    let only_clipped = report.inexact.pixels == report.spectra.clipped;
     assert!(
-        report.roundtrip.max_de2000 < 1e-3 || opts.method != Method::Faithful,
+        report.roundtrip.max_de2000 < 1e-3 || opts.method != Method::Faithful || only_clipped,
         "{name}: round trip {:?}",
         report.roundtrip
     );
@@ -112,6 +115,45 @@ fn the_default_renders_scenes_of_several_lights_within_the_targets() {
     };
     let r = measure(d.path(), "room_incandescent_dusk", &opts);
     assert!(r.mean_de2000 < 0.4, "room: mean {}", r.mean_de2000);
+}
+
+/// The studios, the living room and the dusk street of tools/truth_studio.py (issue 41): LED
+/// softboxes, xenon flash through a diffuser and tungsten under the default flags, a daylight
+/// window beside warm LED lamps. The dusk street's coated sodium lamps (c100s54c) have a black
+/// body's white, so no table's spectrum can be inferred from them: the nearest sodium table
+/// (hps) renders the ColorChecker 3.6 from them by itself (HP2 2.7); its bound is held, and with
+/// the lamps named the street is 0.66.
+#[test]
+fn the_default_renders_studios_rooms_and_the_dusk_street_within_the_targets() {
+    let d = tempfile::tempdir().unwrap();
+    for (name, mean) in [
+        ("studio_led", 0.8),
+        ("studio_flash", 0.8),
+        ("studio_tungsten", 0.8),
+        ("room_window_lamps", 0.6),
+    ] {
+        within(
+            measure(d.path(), name, &ConvertOptions::faithful()),
+            mean,
+            name,
+        );
+    }
+    let street = measure(d.path(), "street_dusk", &ConvertOptions::faithful());
+    assert!(
+        street.mean_de2000 < 3.0,
+        "street_dusk: {}",
+        street.mean_de2000
+    );
+    let named = ConvertOptions {
+        light: LightSpec::Named("c100s54c".into()),
+        ..ConvertOptions::faithful()
+    };
+    // (--light gives every lamp that spectrum, the two LED lamps' too: 0.66.)
+    within(
+        measure(d.path(), "street_dusk", &named),
+        0.75,
+        "street_dusk",
+    );
 }
 
 #[test]

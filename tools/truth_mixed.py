@@ -52,14 +52,17 @@ def lamp(name, wl):
     return v / xyz_of(v, wl)[1]
 
 
-def rect_gain(p, n, centre, a, b, m, cells=(12, 12)):
+def rect_gain(p, n, centre, a, b, m, cells=(12, 12), weight=None):
     """Per unit radiance of a Lambertian rectangle (centre, half-axes a, b, emitting towards
-    m): the irradiance at points p with normals n, by the midpoint rule."""
+    m): the irradiance at points p with normals n, by the midpoint rule. `weight(u, v)` (u, v in
+    [-1, 1] along a and b) scales the radiance over the face (None: uniform)."""
     us = ((np.arange(cells[0]) + 0.5) / cells[0]) * 2 - 1
     vs = ((np.arange(cells[1]) + 0.5) / cells[1]) * 2 - 1
     src = (np.asarray(centre)[None, None] + us[:, None, None] * np.asarray(a)
            + vs[None, :, None] * np.asarray(b)).reshape(-1, 3)
     area = 4 * np.linalg.norm(a) * np.linalg.norm(b) / src.shape[0]
+    if weight is not None:
+        area = area * weight(us[:, None], vs[None, :]).reshape(-1)
     g = np.zeros(len(p))
     for i in range(0, len(p), 2048):
         q, nn = p[i:i + 2048, None, :], n[i:i + 2048, None, :]

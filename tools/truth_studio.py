@@ -10,7 +10,8 @@ Small numpy ray casters in the style of truth_mixed.py, each returning (waveleng
   is a white cyclorama (`white-9.5`) curving into the floor through a quarter cylinder of radius
   1.5 m, its white running on over the floor to z = -1.5 m; the rest of the floor is grey
   concrete (`neutral-5`). Three softboxes face the subject: Lambertian 1 x 1.4 m rectangles,
-  one-sided, uniform, key (azimuth 140 degrees from +z towards +x, 35 degrees above the
+  one-sided, with a gentle hot spot (`hot_spot`: 15% dimmer in the corners than at the centre,
+  whose luminance is given), key (azimuth 140 degrees from +z towards +x, 35 degrees above the
   horizon, 3 m away horizontally, luminance 4000), fill (-130 degrees, 25 degrees, 3.2 m, 2000)
   and rim (35 degrees, 40 degrees, 2.5 m, 3000); their backs are black fabric. The lamps:
   - `studio_led`: `phosphor-led` (NIST CQS "Phosphor LED YAG": a blue pump at 465 nm and a broad
@@ -145,6 +146,13 @@ def studio_mean_reflectance(wl):
     return rho / area, area
 
 
+def hot_spot(ua, ub):
+    """A softbox's luminance over its face relative to its centre's (ua, ub in [-1, 1]): a
+    gentle hot spot, 15% dimmer in the corners, as real diffusers are (a perfectly uniform face
+    would sit at the map's maximum in every pixel, which is how clipping looks)."""
+    return 1.0 - 0.075 * (ua * ua + ub * ub)
+
+
 def studio(wl, spd):
     """The studio lit by three softboxes of `spd` (at luminance 1), each at its luminance."""
     dirs = latlong_dirs(WIDTH, HEIGHT, SS).reshape(-1, 3)
@@ -154,8 +162,9 @@ def studio(wl, spd):
     e = np.zeros((len(p), len(wl)))
     flux = np.zeros(len(wl))
     for (centre, a, b, m), (*_, lum) in zip(boxes, SOFTBOXES):
-        e += rect_gain(p, n, centre, a, b, m)[:, None] * (spd * lum)[None]
-        flux += math.pi * 4 * np.linalg.norm(a) * np.linalg.norm(b) * spd * lum
+        e += rect_gain(p, n, centre, a, b, m, weight=hot_spot)[:, None] * (spd * lum)[None]
+        mean_hot = 1.0 - 0.075 * 2 / 3   # hot_spot's mean over the face
+        flux += math.pi * 4 * np.linalg.norm(a) * np.linalg.norm(b) * spd * lum * mean_hot
     rho, area = studio_mean_reflectance(wl)
     indirect = flux / area * rho / (1 - rho)
     radiance = refl * (e + indirect[None]) / math.pi
@@ -169,7 +178,8 @@ def studio(wl, spd):
         ua = ((q - centre) @ a) / (a @ a)
         ub = ((q - centre) @ b) / (b @ b)
         hit = (t > 0) & (t < t_shell) & (np.abs(ua) <= 1) & (np.abs(ub) <= 1)
-        radiance[hit & (dm < 0)] = spd * lum
+        front = hit & (dm < 0)
+        radiance[front] = hot_spot(ua[front], ub[front])[:, None] * (spd * lum)[None]
         radiance[hit & (dm >= 0)] = patch(FABRIC, wl) * indirect / math.pi
         t_shell = np.where(hit, t, t_shell)
     return average_pixels(radiance)

@@ -89,8 +89,9 @@ pub(crate) const LAMP_CORE: f64 = 0.25;
 /// a lamp's core is far smaller.
 pub(crate) const GLOW_MIN_SR: f64 = 0.01;
 /// A glow joins a twilight sky at most this many times the sky's median luminance: the
-/// afterglow over the sunset (about 100 times the sky at the zenith), not a lamp.
-pub(crate) const GLOW_CONTRAST: f64 = 200.0;
+/// afterglow over the sunset (about 100 times the sky at the zenith) or a city's glow over a
+/// night sky (300 times), not a street lamp (thousands).
+pub(crate) const GLOW_CONTRAST: f64 = 1000.0;
 /// A window holding this share of the map's energy shows the map is a room: its sky is seen
 /// through it, and what is grown from the zenith is a ceiling.
 pub(crate) const ROOM_WINDOW_SHARE: f64 = 0.01;
@@ -615,6 +616,21 @@ fn lamp_lights(
     Ok(())
 }
 
+/// A daylight-white lamp (of the daylight locus' colours, 4000 K and up, not a strip) whose
+/// white is no LED's or xenon table's within a just noticeable difference: a panel, a softbox
+/// or a flash of unknown kind, or a lamp the camera was white-balanced to. The daylight of its
+/// colour is the proxy that costs least across them (the ColorChecker's mean CIEDE2000 from a
+/// xenon flash 0.45, from FL7 1.1, FL8 0.5; a wrong table costs 1.3 to 2.5:
+/// `tools/lamp_rendition.py`).
+fn unknown_daylight_white(c: &Candidate, m: &LampMatch) -> bool {
+    let known = m.distance_uv <= super::families::SAME_WHITE_UV
+        && matches!(m.family, super::Family::Led | super::Family::Xenon);
+    c.colour.daylight()
+        && c.colour.cct_k.is_some_and(|k| k >= SKY_MIN_K)
+        && c.e.stats.elongation < super::families::STRIP_ELONGATION
+        && !known
+}
+
 /// Inside an enclosure with no sky in view, a daylight-white emitter below [`WINDOW_BLUE_K`] is a
 /// lamp (a white lamp's CCT tops out near 7000 K; skylight through a window is bluer), and one
 /// at most [`LIT_BY_LAMP`] of the brightest lamp is a surface the lamps light: both leave
@@ -1052,8 +1068,10 @@ fn lamp_light(
     } else {
         "an emitter not of daylight"
     };
+    let daylight_panel = inside && unknown_daylight_white(c, &m);
     let spd = match &settings.lamps {
         Some(name) => LightSpd::Table { name: name.clone() },
+        None if daylight_panel => daylight_spd(&c.colour),
         None => match m.family {
             super::Family::Incandescent => LightSpd::Planckian {
                 cct_k: c
@@ -1070,6 +1088,14 @@ fn lamp_light(
     let reason = match &settings.lamps {
         Some(name) => format!(
             "{what}; its spectrum is {name} (--light); its colour is nearest {} ({}, {:.4} uv)",
+            m.spd,
+            m.family.name(),
+            m.distance_uv
+        ),
+        None if daylight_panel => format!(
+            "{what} ({}); no LED or xenon table has its white (nearest {}, {}, {:.4} uv): a \
+             daylight-white panel or flash of unknown kind, given the daylight of its colour",
+            c.colour.describe(),
             m.spd,
             m.family.name(),
             m.distance_uv

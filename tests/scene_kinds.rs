@@ -1,0 +1,154 @@
+//! What `specmap inspect --json` names in studios, rooms, dusk and night (issue 41): four real
+//! CC0 photographs (tests/data/real, README there) and the truth scenes of
+//! tools/truth_studio.py. Each decision is read from the JSON (`kind`, `solid_angle_sr`,
+//! `energy_share`, `reason`, the lamp's `family`), as a user's script would.
+
+use serde_json::Value;
+use std::path::Path;
+use std::process::Command;
+
+fn inspect(path: &str) -> Value {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let out = Command::new(env!("CARGO_BIN_EXE_specmap"))
+        .arg("inspect")
+        .arg(root.join(path))
+        .arg("--json")
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+fn lights<'a>(j: &'a Value, kind: &str) -> Vec<&'a Value> {
+    j["lights"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|l| l["kind"] == kind)
+        .collect()
+}
+
+fn share(ls: &[&Value]) -> f64 {
+    ls.iter().map(|l| l["energy_share"].as_f64().unwrap()).sum()
+}
+
+fn sr(ls: &[&Value]) -> f64 {
+    ls.iter()
+        .map(|l| l["solid_angle_sr"].as_f64().unwrap())
+        .sum()
+}
+
+fn family(l: &Value) -> &str {
+    l["lamp"]["family"].as_str().unwrap_or("")
+}
+
+fn reflectors(j: &Value) -> String {
+    j["bright_reflectors"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r.as_str().unwrap())
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+/// A studio of softboxes, a white cyclorama and black curtains: the softboxes are lamps, the
+/// cyclorama and floor the walls of an enclosure, and there is neither sky nor sun.
+#[test]
+fn a_real_studio_names_its_softboxes_as_lamps_and_has_no_sky() {
+    let j = inspect("tests/data/real/studio.exr");
+    let text = j.to_string();
+    assert!(lights(&j, "sky").is_empty(), "{text}");
+    assert!(lights(&j, "sun").is_empty(), "{text}");
+    let lamps = lights(&j, "lamp");
+    assert!(lamps.len() >= 2, "{text}");
+    assert!(share(&lamps) > 0.6, "{text}");
+    assert!(
+        reflectors(&j).contains("the walls of an enclosure"),
+        "{text}"
+    );
+}
+
+/// A foyer under a vaulted ceiling with spots and strip lights: the ceiling and walls are no
+/// sky; what daylight there is covers under 2 sr; the lamps are named.
+#[test]
+fn a_real_room_keeps_its_walls_out_of_the_sky() {
+    let j = inspect("tests/data/real/lobby.exr");
+    let text = j.to_string();
+    assert!(lights(&j, "sky").is_empty(), "{text}");
+    assert!(sr(&lights(&j, "window")) < 2.0, "{text}");
+    assert!(lights(&j, "lamp").len() >= 5, "{text}");
+}
+
+/// Dawn over hills and a night field: the sky, glow and all, is the sky.
+#[test]
+fn dusk_and_night_keep_their_bright_sky_in_the_sky() {
+    for (map, least) in [("dawn", 0.8), ("night", 0.8)] {
+        let j = inspect(&format!("tests/data/real/{map}.exr"));
+        let text = j.to_string();
+        let sky = lights(&j, "sky");
+        assert_eq!(sky.len(), 1, "{map}: {text}");
+        assert!(share(&sky) > least, "{map}: {text}");
+        assert!(
+            sky[0]["reason"].as_str().unwrap().contains("twilight"),
+            "{map}: {text}"
+        );
+        // No lamp holding more than 1% of the energy (the glow is no fluorescent tube).
+        assert!(
+            lights(&j, "lamp")
+                .iter()
+                .all(|l| l["energy_share"].as_f64().unwrap() < 0.01),
+            "{map}: {text}"
+        );
+    }
+}
+
+/// The truth studios: three softboxes, three lamps of the right family, no sky, no window, no
+/// sun, whatever the lamps' white.
+#[test]
+fn the_truth_studios_are_three_lamps_of_their_family() {
+    for (scene, fam) in [
+        ("studio_led", "led"),
+        ("studio_flash", "xenon"),
+        ("studio_tungsten", "incandescent"),
+    ] {
+        let j = inspect(&format!("tests/data/truth/{scene}.rgb.exr"));
+        let text = j.to_string();
+        let lamps = lights(&j, "lamp");
+        assert_eq!(lamps.len(), 3, "{scene}: {text}");
+        assert!(lamps.iter().all(|l| family(l) == fam), "{scene}: {text}");
+        for kind in ["sky", "window", "sun"] {
+            assert!(lights(&j, kind).is_empty(), "{scene} {kind}: {text}");
+        }
+    }
+}
+
+/// The living room: its window is a window under 2 sr, its three warm lamps are lamps.
+#[test]
+fn the_truth_room_has_its_window_and_its_lamps() {
+    let j = inspect("tests/data/truth/room_window_lamps.rgb.exr");
+    let text = j.to_string();
+    let windows = lights(&j, "window");
+    assert_eq!(windows.len(), 1, "{text}");
+    assert!(sr(&windows) < 2.0 && share(&windows) > 0.3, "{text}");
+    assert!(lights(&j, "sky").is_empty(), "{text}");
+    assert_eq!(lights(&j, "lamp").len(), 3, "{text}");
+}
+
+/// The dusk street: the twilight sky is the sky; the sodium lamps are sodium (a coated lamp's
+/// white is a black body's) and the LED lamps LEDs, not patches of sky.
+#[test]
+fn the_truth_dusk_street_names_sodium_and_led_lamps_under_its_sky() {
+    let j = inspect("tests/data/truth/street_dusk.rgb.exr");
+    let text = j.to_string();
+    assert_eq!(lights(&j, "sky").len(), 1, "{text}");
+    let lamps = lights(&j, "lamp");
+    let count = |f: &str| lamps.iter().filter(|l| family(l) == f).count();
+    assert!(count("high-pressure-sodium") >= 4, "{text}");
+    assert!(count("led") >= 1, "{text}");
+    assert!(lights(&j, "sun").is_empty(), "{text}");
+}
