@@ -46,6 +46,9 @@ GROUPS = {
     "4000 K": (["f32t8-tl841", "tl84", "t8-polylux-4000", "cool-white-fl", "mhc100-u-mp-4k"],
                [("illuminant", n) for n in ("FL11", "FL3.8", "FL3.5", "FL9", "FL6", "FL2", "LED-B3", "HP4")]
                + [("light", "mercury")]),
+    "daylight white": (["phosphor-led", "kinoton-75p", "f40-c75"],
+                       [("illuminant", n) for n in ("LED-B4", "LED-B5", "FL7", "FL8", "D65")]
+                       + [("light", "kinoton-75p"), ("light", "phosphor-led")]),
 }
 
 

@@ -88,6 +88,10 @@ pub(crate) const LAMP_CORE: f64 = 0.25;
 /// A glow touching a twilight sky joins it when its core covers this solid angle (sr) or more:
 /// a lamp's core is far smaller.
 pub(crate) const GLOW_MIN_SR: f64 = 0.01;
+/// A sky holding less of the map's energy than this is a dusk or night sky: a daylight-white
+/// emitter ten times brighter is a lamp there (in daylight it is a patch of sky, a cloud in the
+/// sun between leaves).
+pub(crate) const DUSK_SKY_SHARE: f64 = 0.25;
 /// A glow joins a twilight sky at most this many times the sky's median luminance: the
 /// afterglow over the sunset (about 100 times the sky at the zenith) or a city's glow over a
 /// night sky (300 times), not a street lamp (thousands).
@@ -296,7 +300,14 @@ fn find_daylight(
     if inside {
         indoor_daylight(candidates, &mut daylight);
     } else {
-        outshining_the_sky(cells, candidates, &dim, indoors.blurred_sun, &mut daylight);
+        outshining_the_sky(
+            cells,
+            candidates,
+            &dim,
+            indoors.blurred_sun,
+            levels.total_energy,
+            &mut daylight,
+        );
     }
     Ok(Daylight {
         daylight,
@@ -583,16 +594,7 @@ fn lamp_lights(
     };
     for &c in free {
         let share = c.e.stats.energy / levels.total_energy.max(f64::MIN_POSITIVE);
-        if share < MIN_LAMP_SHARE {
-            out.bright_reflectors.push(format!(
-                "a bright region ({} pixels, {:.1} degrees up, {}) holds {:.3}% of the energy: too \
-                 small and faint to matter, left to its surroundings",
-                c.e.cells.len(),
-                c.e.stats.elevation_deg(),
-                c.colour.describe(),
-                100.0 * share
-            ));
-        } else if lit_by_lamp(c) {
+        if lit_by_lamp(c) {
             out.bright_reflectors.push(format!(
                 "a bright region ({} pixels, {:.1} degrees up, {}) at {:.1e} of the brightest \
                  lamp's luminance and near a lamp's colour: a surface lamps light",
@@ -605,6 +607,14 @@ fn lamp_lights(
             sky_cells.extend(&c.e.cells);
         } else {
             match lamp_or_reflector(c, context, settings)? {
+                Ok(_) if share < MIN_LAMP_SHARE => out.bright_reflectors.push(format!(
+                    "a bright region ({} pixels, {:.1} degrees up, {}) holds {:.3}% of the \
+                     energy: too small and faint to matter, left to its surroundings",
+                    c.e.cells.len(),
+                    c.e.stats.elevation_deg(),
+                    c.colour.describe(),
+                    100.0 * share
+                )),
                 Ok(lamp) => {
                     out.lights
                         .push(lamp_light(cells, levels, c, lamp, settings, context.inside))
@@ -650,7 +660,8 @@ fn indoor_daylight(candidates: &[Candidate], daylight: &mut Vec<(usize, LightKin
     daylight.retain(|&(k, _)| !lamp(k) && peak(k) > LIT_BY_LAMP * lamp_peak);
 }
 
-/// With a sky in view, a daylight-white emitter smaller than a sky whose mean luminance is
+/// At dusk (the sky holding under [`DUSK_SKY_SHARE`] of the energy), a daylight-white emitter
+/// smaller than a sky whose mean luminance is
 /// [`DAYLIGHT_LAMP_CONTRAST`] times the sky's bright parts (the 95th percentile of its cells) is
 /// a lamp (a cool LED street lamp at dusk), not a patch of sky or a window: it leaves `daylight`
 /// (a blurred sun, the brightest candidate, stays).
@@ -659,6 +670,7 @@ fn outshining_the_sky(
     candidates: &[Candidate],
     dim: &[Region],
     blurred_sun: bool,
+    total_energy: f64,
     daylight: &mut Vec<(usize, LightKind)>,
 ) {
     let skies: Vec<(usize, LightKind)> = (daylight.iter().copied())
@@ -668,7 +680,10 @@ fn outshining_the_sky(
         .iter()
         .filter(|d| kind_of(&d.stats) == LightKind::Sky)
         .collect();
-    if skies.is_empty() && dim_skies.is_empty() {
+    let sky_energy: f64 = (skies.iter().map(|&(k, _)| candidates[k].e.stats.energy))
+        .chain(dim_skies.iter().map(|d| d.stats.energy))
+        .sum();
+    if sky_energy >= DUSK_SKY_SHARE * total_energy || (skies.is_empty() && dim_skies.is_empty()) {
         return;
     }
     let mut y: Vec<f32> = (skies
