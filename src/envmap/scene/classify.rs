@@ -88,6 +88,10 @@ pub(crate) const LAMP_CORE: f64 = 0.25;
 /// A glow touching a twilight sky joins it when its core covers this solid angle (sr) or more:
 /// a lamp's core is far smaller.
 pub(crate) const GLOW_MIN_SR: f64 = 0.01;
+/// Indoors, a daylight-white lamp of this CCT (K) or more whose white no LED or xenon table
+/// matches is given the daylight of its colour (a flash, a daylight panel, a D-simulator tube,
+/// a lamp the camera was balanced to).
+pub(crate) const DAYLIGHT_PANEL_K: f64 = 5500.0;
 /// A sky holding less of the map's energy than this is a dusk or night sky: a daylight-white
 /// emitter ten times brighter is a lamp there (in daylight it is a patch of sky, a cloud in the
 /// sun between leaves).
@@ -626,7 +630,8 @@ fn lamp_lights(
     Ok(())
 }
 
-/// A daylight-white lamp (of the daylight locus' colours, 4000 K and up, not a strip) whose
+/// A daylight-white lamp (of the daylight locus' colours, [`DAYLIGHT_PANEL_K`] and up, not a
+/// strip; warmer whites indoors are most often LEDs of the catalogue's kinds) whose
 /// white is no LED's or xenon table's within a just noticeable difference: a panel, a softbox
 /// or a flash of unknown kind, or a lamp the camera was white-balanced to. The daylight of its
 /// colour is the proxy that costs least across them (the ColorChecker's mean CIEDE2000 from a
@@ -636,7 +641,7 @@ fn unknown_daylight_white(c: &Candidate, m: &LampMatch) -> bool {
     let known = m.distance_uv <= super::families::SAME_WHITE_UV
         && matches!(m.family, super::Family::Led | super::Family::Xenon);
     c.colour.daylight()
-        && c.colour.cct_k.is_some_and(|k| k >= SKY_MIN_K)
+        && c.colour.cct_k.is_some_and(|k| k >= DAYLIGHT_PANEL_K)
         && c.e.stats.elongation < super::families::STRIP_ELONGATION
         && !known
 }
