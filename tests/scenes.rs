@@ -248,3 +248,37 @@ fn a_sunlit_yellow_wall_beside_the_sky_is_a_reflector() {
         "{text}"
     );
 }
+
+/// A courtyard open to the sky on one side, its sunlit paving below the horizon as bright as the
+/// sky above it and joined to it: the sky is only what lies above the horizon (issue 41).
+#[test]
+fn a_sky_never_runs_below_the_horizon_onto_the_paving() {
+    let sky = white(8000.0);
+    let m = map(|d| {
+        let azimuth = d[0].atan2(d[2]).to_degrees();
+        let elevation = d[1].clamp(-1.0, 1.0).asin().to_degrees();
+        if azimuth.abs() > 30.0 || elevation < -20.0 {
+            rgb(white(3000.0), 0.05)
+        } else if elevation > 0.0 {
+            rgb(sky, 10.0)
+        } else {
+            rgb(sky, 8.0)
+        }
+    });
+    let s = scene(&m);
+    let text = describe(&s);
+    let found: Vec<_> = s
+        .lights
+        .iter()
+        .filter(|l| l.kind == LightKind::Sky)
+        .collect();
+    assert_eq!(found.len(), 1, "{text}");
+    assert!(
+        found[0]
+            .cells
+            .iter()
+            .all(|&i| s.cells.direction(i)[1] > 0.0),
+        "{text}"
+    );
+    assert!(found[0].solid_angle_sr < 1.2, "{text}");
+}

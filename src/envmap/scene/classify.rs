@@ -472,6 +472,9 @@ fn sky_light(
     mut sky_cells: Vec<usize>,
     twilight: bool,
 ) -> Result<Light> {
+    // A sky is above the horizon: what of it lies below (a daylit floor joined to it, haze
+    // over the paving) is a surface it lights.
+    sky_cells.retain(|&i| cells.direction(i)[1] > 0.0);
     sky_cells.sort_unstable();
     let why = match twilight {
         true => {
