@@ -252,6 +252,26 @@ def to_mitsuba(d):
     return [d[0], -d[2], d[1]]
 
 
+def sun_disk(sun):
+    """61 directions across the sun's disk (Mitsuba's aperture) around `sun`: its centre and rings
+    of 6k directions at (k - 1/2)/4 of the radius, k = 1..4; and their weights (each ring's share
+    of the disk's area), summing to 1."""
+    half_ap = math.radians(SUN_APERTURE_DEG) / 2
+    t1 = np.cross(sun, [0.0, 1.0, 0.0])
+    t1 /= np.linalg.norm(t1)
+    t2 = np.cross(sun, t1)
+    samples, weights = [sun], [1.0]
+    for k in range(1, 5):
+        r = (k - 0.5) / 4 * half_ap
+        for j in range(6 * k):
+            phi = 2 * math.pi * (j + 0.5 * (k % 2)) / (6 * k)
+            d = math.cos(r) * sun + math.sin(r) * (math.cos(phi) * t1 + math.sin(phi) * t2)
+            samples.append(d)
+            weights.append(2 * k - 1)  # ring area share
+    weights = np.array(weights, float)
+    return samples, weights / weights.sum()
+
+
 def sky_scene(mi, dr, elevation_deg, turbidity):
     wl = grid(MITSUBA_MAX_NM)
     wl_eval = np.minimum(wl, MITSUBA_MAX_NM - 1e-3)  # NaN at exactly 720 nm
@@ -283,24 +303,11 @@ def sky_scene(mi, dr, elevation_deg, turbidity):
             radiance[y, x] = evaluate(sky, dirs[y, x])
     # The sun: average radiance over its disk (rings of 6k directions at k/4 of the radius),
     # times the disk's solid angle, into the pixel that holds its direction.
-    half_ap = math.radians(SUN_APERTURE_DEG) / 2
-    t1 = np.cross(sun, [0.0, 1.0, 0.0])
-    t1 /= np.linalg.norm(t1)
-    t2 = np.cross(sun, t1)
-    samples, weights = [sun], [1.0]
-    for k in range(1, 5):
-        r = (k - 0.5) / 4 * half_ap
-        for j in range(6 * k):
-            phi = 2 * math.pi * (j + 0.5 * (k % 2)) / (6 * k)
-            d = math.cos(r) * sun + math.sin(r) * (math.cos(phi) * t1 + math.sin(phi) * t2)
-            samples.append(d)
-            weights.append(2 * k - 1)  # ring area share
-    weights = np.array(weights, float)
-    weights /= weights.sum()
+    samples, weights = sun_disk(sun)
     sun_l = sum(wt * evaluate(sun_only, d) for wt, d in zip(weights, samples))
     if not (sun_l > 0).all():
         raise SystemExit("the sun disk was missed: check the sun's sampling")
-    omega_sun = 2 * math.pi * (1 - math.cos(half_ap))
+    omega_sun = 2 * math.pi * (1 - math.cos(math.radians(SUN_APERTURE_DEG) / 2))
     sx, sy = pixel_of(sun, WIDTH, HEIGHT)
     radiance[sy, sx] += sun_l * omega_sun / omega[sy, sx]
     # The ground: ColorChecker patches lit by the upper hemisphere.
@@ -407,36 +414,34 @@ def interior_scene(tube):
     return wl, radiance, params
 
 
-def street(wl, lamp_spds, sky_spd, sky_fraction):
-    """A night street 12 m wide between facades, seven lamps on 7 m poles 15 m apart, alternating
-    sides, each a 0.3 m sphere of intensity 2000 x its spectrum (each at luminance 1) emitting
-    downwards only, under a sky of `sky_spd` (luminance 1) at `sky_fraction` of the road's
-    luminance under a lamp. Radiance per pixel, 4 x 4 samples each."""
-    eye = np.array([0.0, 1.6, 0.0])
-    half_w, facade_h, lamp_h, lamp_r = 6.0, 15.0, 7.0, 0.3
-    lamps = np.array([[4.5 if k % 2 == 0 else -4.5, lamp_h, 15.0 * (k - 3)] for k in range(7)])
-    # Intensity so that the road under a lamp has illuminance-like luminance ~ 1.
-    intensities = [spd * 2000.0 for spd in lamp_spds]
-    ss = 4
-    dirs = latlong_dirs(WIDTH, HEIGHT, ss).reshape(-1, 3)
+STREET_EYE = np.array([0.0, 1.6, 0.0])
+STREET_HALF_W, FACADE_H, LAMP_H, LAMP_R = 6.0, 15.0, 7.0, 0.3
+# Seven lamps on poles 15 m apart, alternating sides.
+STREET_LAMPS = np.array([[4.5 if k % 2 == 0 else -4.5, LAMP_H, 15.0 * (k - 3)] for k in range(7)])
+
+
+def street_hits(dirs):
+    """Where rays from the eye meet the street: points, normals, what was hit (-1 the sky, 0 the
+    road, 1 the facade at -x, 2 at +x, 3 a lamp) and which lamp (-1 for none)."""
+    eye, half_w = STREET_EYE, STREET_HALF_W
     n_rays = len(dirs)
     t = np.full(n_rays, np.inf)
-    kind = np.full(n_rays, -1)  # 0 road, 1 facade -x, 2 facade +x, 3 lamp k via lamp_id
+    kind = np.full(n_rays, -1)
     with np.errstate(divide="ignore", invalid="ignore"):
         t_road = np.where(dirs[:, 1] < 0, -eye[1] / dirs[:, 1], np.inf)
         t_fx = np.where(dirs[:, 0] > 0, (half_w - eye[0]) / dirs[:, 0],
                         np.where(dirs[:, 0] < 0, (-half_w - eye[0]) / dirs[:, 0], np.inf))
     y_at_facade = eye[1] + t_fx * dirs[:, 1]
-    t_fx = np.where((y_at_facade >= 0) & (y_at_facade <= facade_h), t_fx, np.inf)
+    t_fx = np.where((y_at_facade >= 0) & (y_at_facade <= FACADE_H), t_fx, np.inf)
     take = t_road < t
     t[take], kind[take] = t_road[take], 0
     take = t_fx < t
     t[take], kind[take] = t_fx[take], np.where(dirs[take, 0] < 0, 1, 2)
     lamp_id = np.full(n_rays, -1)
-    for k, c in enumerate(lamps):
+    for k, c in enumerate(STREET_LAMPS):
         oc = eye - c
         b = dirs @ oc
-        disc = b * b - (oc @ oc - lamp_r ** 2)
+        disc = b * b - (oc @ oc - LAMP_R ** 2)
         tl = np.where(disc > 0, -b - np.sqrt(np.maximum(disc, 0)), np.inf)
         take = (tl > 0) & (tl < t)
         t[take], kind[take], lamp_id[take] = tl[take], 3, k
@@ -445,6 +450,37 @@ def street(wl, lamp_spds, sky_spd, sky_fraction):
     normals[kind == 0] = [0, 1, 0]
     normals[kind == 1] = [1, 0, 0]
     normals[kind == 2] = [-1, 0, 0]
+    return p, normals, kind, lamp_id
+
+
+def street_materials(p, kind, wl):
+    """A neutral-3.5 road with neutral-6.5 pavements, facades with shop fronts of the 24 patches."""
+    refl = np.zeros((len(p), len(wl)))
+    road = kind == 0
+    refl[road] = patch("neutral-3.5", wl)
+    refl[road & (np.abs(p[:, 0]) >= 4.0)] = patch("neutral-6.5", wl)
+    for side, base in ((1, "light-skin"), (2, "neutral-6.5")):
+        m = kind == side
+        refl[m] = patch(base, wl)
+        shop = m & (p[:, 1] >= 0.5) & (p[:, 1] <= 3.5)
+        cell = (np.floor((p[:, 2] + 300.0) / 3.0).astype(int) + (12 if side == 2 else 0)) % 24
+        for c in range(24):
+            refl[shop & (cell == c)] = patch(c, wl)
+    return refl
+
+
+def street(wl, lamp_spds, sky_spd, sky_fraction):
+    """A night street 12 m wide between facades, seven lamps on 7 m poles 15 m apart, alternating
+    sides, each a 0.3 m sphere of intensity 2000 x its spectrum (each at luminance 1) emitting
+    downwards only, under a sky of `sky_spd` (luminance 1) at `sky_fraction` of the road's
+    luminance under a lamp. Radiance per pixel, 4 x 4 samples each."""
+    lamps = STREET_LAMPS
+    # Intensity so that the road under a lamp has illuminance-like luminance ~ 1.
+    intensities = [spd * 2000.0 for spd in lamp_spds]
+    ss = 4
+    dirs = latlong_dirs(WIDTH, HEIGHT, ss).reshape(-1, 3)
+    n_rays = len(dirs)
+    p, normals, kind, lamp_id = street_hits(dirs)
     surf = (kind == 0) | (kind == 1) | (kind == 2)
     # The lamps' geometric factors, summed over the lamps of each spectrum (in lamp order).
     groups = []
@@ -460,21 +496,11 @@ def street(wl, lamp_spds, sky_spd, sky_fraction):
             groups.append([i_spd, np.zeros(n_rays)])
             same = groups[-1]
         same[1] += g
-    refl = np.zeros((n_rays, len(wl)))
-    road = kind == 0
-    refl[road] = patch("neutral-3.5", wl)
-    refl[road & (np.abs(p[:, 0]) >= 4.0)] = patch("neutral-6.5", wl)
-    for side, base in ((1, "light-skin"), (2, "neutral-6.5")):
-        m = kind == side
-        refl[m] = patch(base, wl)
-        shop = m & (p[:, 1] >= 0.5) & (p[:, 1] <= 3.5)
-        cell = (np.floor((p[:, 2] + 300.0) / 3.0).astype(int) + (12 if side == 2 else 0)) % 24
-        for c in range(24):
-            refl[shop & (cell == c)] = patch(c, wl)
+    refl = street_materials(p, kind, wl)
     radiance = sum(refl * i_spd[None] * (g / np.pi)[:, None] for i_spd, g in groups)
     for k in range(len(lamps)):
-        radiance[(kind == 3) & (lamp_id == k)] = intensities[k] / (np.pi * lamp_r ** 2)
-    road_l = xyz_of(patch("neutral-3.5", wl) * intensities[0] * (1.0 / (lamp_h ** 2)) / np.pi,
+        radiance[(kind == 3) & (lamp_id == k)] = intensities[k] / (np.pi * LAMP_R ** 2)
+    road_l = xyz_of(patch("neutral-3.5", wl) * intensities[0] * (1.0 / (LAMP_H ** 2)) / np.pi,
                     wl)[1]
     radiance[kind == -1] = sky_spd * sky_fraction * road_l
     return radiance.reshape(HEIGHT, WIDTH, ss * ss, len(wl)).mean(2)

@@ -75,6 +75,26 @@ def rect_gain(p, n, centre, a, b, m, cells=(12, 12), weight=None):
     return g
 
 
+def cosine_directions(seed):
+    """256 stratified cosine-weighted directions about +z (16 x 16 jittered strata, the jitter
+    drawn with numpy's generator from `seed`), as an array (256, 3)."""
+    rng = np.random.default_rng(seed)
+    u = (np.arange(16)[:, None] + rng.random((16, 16))) / 16
+    v = (np.arange(16)[None, :] + rng.random((16, 16))) / 16
+    r, phi = np.sqrt(u.ravel()), 2 * np.pi * v.ravel()
+    return np.stack([r * np.cos(phi), r * np.sin(phi), np.sqrt(1 - r * r)], -1)
+
+
+def around_normals(local, nn):
+    """The directions `local` (about +z) turned about each normal of `nn`: (len(nn), n, 3)."""
+    helper = np.where(np.abs(nn[:, 1:2]) < 0.9, [[0.0, 1.0, 0.0]], [[1.0, 0.0, 0.0]])
+    t1 = np.cross(nn, helper)
+    t1 /= np.linalg.norm(t1, axis=1, keepdims=True)
+    t2 = np.cross(nn, t1)
+    return (local[None, :, 0:1] * t1[:, None] + local[None, :, 1:2] * t2[:, None]
+            + local[None, :, 2:3] * nn[:, None])
+
+
 def in_rect(p, centre, a, b):
     """Points p inside the rectangle: on its plane, within its half-axes."""
     a, b = np.asarray(a, float), np.asarray(b, float)
@@ -233,20 +253,11 @@ def yard_overcast():
     for c in range(24):
         refl[band & (cell == c)] = patch(c, wl)
     # Sky light through the opening: 256 stratified cosine-weighted directions per point.
-    rng = np.random.default_rng(13)
-    u = (np.arange(16)[:, None] + rng.random((16, 16))) / 16
-    v = (np.arange(16)[None, :] + rng.random((16, 16))) / 16
-    r, phi = np.sqrt(u.ravel()), 2 * np.pi * v.ravel()
-    local = np.stack([r * np.cos(phi), r * np.sin(phi), np.sqrt(1 - r * r)], -1)
+    local = cosine_directions(13)
     e_sky = np.zeros(len(p))
     for i in range(0, len(p), 1024):
         q, nn = p[i:i + 1024], n[i:i + 1024]
-        helper = np.where(np.abs(nn[:, 1:2]) < 0.9, [[0.0, 1.0, 0.0]], [[1.0, 0.0, 0.0]])
-        t1 = np.cross(nn, helper)
-        t1 /= np.linalg.norm(t1, axis=1, keepdims=True)
-        t2 = np.cross(nn, t1)
-        w = (local[None, :, 0:1] * t1[:, None] + local[None, :, 1:2] * t2[:, None]
-             + local[None, :, 2:3] * nn[:, None])
+        w = around_normals(local, nn)
         with np.errstate(divide="ignore", invalid="ignore"):
             tt = (hi[1] - q[:, None, 1]) / w[..., 1]
         x = q[:, None, 0] + tt * w[..., 0]

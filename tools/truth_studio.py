@@ -52,9 +52,11 @@ import math
 
 import numpy as np
 
-from make_truth import (HEIGHT, SPECTRA, WIDTH, box_hit, grid, latlong_dirs, patch, read_table,
-                        street, xyz_of)
-from truth_mixed import SS, average_pixels, daylight, lamp, rect_gain, room
+from make_truth import (FACADE_H, HEIGHT, LAMP_H, SPECTRA, STREET_HALF_W, WIDTH, box_hit, grid,
+                        latlong_dirs, patch, read_table, street, street_hits, street_materials,
+                        xyz_of)
+from truth_mixed import (SS, around_normals, average_pixels, cosine_directions, daylight, lamp,
+                         rect_gain, room)
 
 # ----------------------------------------------------------------------------------------------
 # The studio
@@ -276,65 +278,21 @@ def sky_profile(up):
 
 def street_sky(wl, sky_spd, road_l):
     """What the twilight sky adds to make_truth.street (whose own sky is set to 0): the sky's
-    pixels, and the road and facades lit by it. The ray cast and materials repeat street()'s."""
-    eye = np.array([0.0, 1.6, 0.0])
-    half_w, facade_h, lamp_h, lamp_r = 6.0, 15.0, 7.0, 0.3
-    lamps = np.array([[4.5 if k % 2 == 0 else -4.5, lamp_h, 15.0 * (k - 3)] for k in range(7)])
+    pixels, and the road and facades lit by it, on street()'s ray cast and materials."""
     dirs = latlong_dirs(WIDTH, HEIGHT, SS).reshape(-1, 3)
-    t = np.full(len(dirs), np.inf)
-    kind = np.full(len(dirs), -1)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t_road = np.where(dirs[:, 1] < 0, -eye[1] / dirs[:, 1], np.inf)
-        t_fx = np.where(dirs[:, 0] > 0, (half_w - eye[0]) / dirs[:, 0],
-                        np.where(dirs[:, 0] < 0, (-half_w - eye[0]) / dirs[:, 0], np.inf))
-    y_at = eye[1] + t_fx * dirs[:, 1]
-    t_fx = np.where((y_at >= 0) & (y_at <= facade_h), t_fx, np.inf)
-    take = t_road < t
-    t[take], kind[take] = t_road[take], 0
-    take = t_fx < t
-    t[take], kind[take] = t_fx[take], np.where(dirs[take, 0] < 0, 1, 2)
-    for c in lamps:
-        oc = eye - c
-        b = dirs @ oc
-        disc = b * b - (oc @ oc - lamp_r ** 2)
-        tl = np.where(disc > 0, -b - np.sqrt(np.maximum(disc, 0)), np.inf)
-        take = (tl > 0) & (tl < t)
-        t[take], kind[take] = tl[take], 3
-    p = eye + np.where(np.isfinite(t), t, 0)[:, None] * dirs
-    n = np.zeros_like(p)
-    n[kind == 0] = [0, 1, 0]
-    n[kind == 1] = [1, 0, 0]
-    n[kind == 2] = [-1, 0, 0]
-    refl = np.zeros((len(p), len(wl)))
-    road = kind == 0
-    refl[road] = patch("neutral-3.5", wl)
-    refl[road & (np.abs(p[:, 0]) >= 4.0)] = patch("neutral-6.5", wl)
-    for side, base in ((1, "light-skin"), (2, "neutral-6.5")):
-        m = kind == side
-        refl[m] = patch(base, wl)
-        shop = m & (p[:, 1] >= 0.5) & (p[:, 1] <= 3.5)
-        cell = (np.floor((p[:, 2] + 300.0) / 3.0).astype(int) + (12 if side == 2 else 0)) % 24
-        for c in range(24):
-            refl[shop & (cell == c)] = patch(c, wl)
+    p, n, kind, _ = street_hits(dirs)
+    refl = street_materials(p, kind, wl)
+    half_w, facade_h = STREET_HALF_W, FACADE_H
     # Sky irradiance (per unit of the road's luminance): 256 stratified cosine-weighted
     # directions per surface point; a direction sees the sky if it leaves the canyon above the
     # facades (the street runs on without end along z).
-    rng = np.random.default_rng(41)
-    u = (np.arange(16)[:, None] + rng.random((16, 16))) / 16
-    v = (np.arange(16)[None, :] + rng.random((16, 16))) / 16
-    r, phi = np.sqrt(u.ravel()), 2 * np.pi * v.ravel()
-    local = np.stack([r * np.cos(phi), r * np.sin(phi), np.sqrt(1 - r * r)], -1)
+    local = cosine_directions(41)
     surf = np.flatnonzero((kind >= 0) & (kind <= 2))
     e_sky = np.zeros(len(p))
     for i in range(0, len(surf), 1024):
         idx = surf[i:i + 1024]
         q, nn = p[idx], n[idx]
-        helper = np.where(np.abs(nn[:, 1:2]) < 0.9, [[0.0, 1.0, 0.0]], [[1.0, 0.0, 0.0]])
-        t1 = np.cross(nn, helper)
-        t1 /= np.linalg.norm(t1, axis=1, keepdims=True)
-        t2 = np.cross(nn, t1)
-        w = (local[None, :, 0:1] * t1[:, None] + local[None, :, 1:2] * t2[:, None]
-             + local[None, :, 2:3] * nn[:, None])
+        w = around_normals(local, nn)
         with np.errstate(divide="ignore", invalid="ignore"):
             tw = np.where(w[..., 0] > 0, (half_w - q[:, None, 0]) / w[..., 0],
                           np.where(w[..., 0] < 0, (-half_w - q[:, None, 0]) / w[..., 0], np.inf))
@@ -357,7 +315,7 @@ def street_dusk():
     for k in LED_POLES:
         spds[k] = lamp("phosphor-led", wl)
     radiance = street(wl, spds, sodium, 0.0)
-    road_l = xyz_of(patch("neutral-3.5", wl) * sodium * 2000.0 / 7.0 ** 2 / np.pi, wl)[1]
+    road_l = xyz_of(patch("neutral-3.5", wl) * sodium * 2000.0 / LAMP_H ** 2 / np.pi, wl)[1]
     radiance = radiance + street_sky(wl, daylight(11000.0, wl), road_l)
     return wl, radiance, {
         "kind": "dusk street: five c100s54c sodium lamps, two phosphor-led LED lamps, a "

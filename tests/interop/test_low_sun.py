@@ -58,19 +58,7 @@ def mitsuba_sun(elevation_deg, turbidity, wl):
                             "turbidity": float(turbidity), "sun_aperture": mt.SUN_APERTURE_DEG,
                             "sky_scale": 0.0})
     wl_eval = np.minimum(wl, mt.MITSUBA_MAX_NM - 1e-3)  # NaN at exactly 720 nm
-    half_ap = math.radians(mt.SUN_APERTURE_DEG) / 2
-    t1 = np.cross(sun, [0.0, 1.0, 0.0])
-    t1 /= np.linalg.norm(t1)
-    t2 = np.cross(sun, t1)
-    samples, weights = [sun], [1.0]
-    for k in range(1, 5):
-        r = (k - 0.5) / 4 * half_ap
-        for j in range(6 * k):
-            phi = 2 * math.pi * (j + 0.5 * (k % 2)) / (6 * k)
-            samples.append(math.cos(r) * sun
-                           + math.sin(r) * (math.cos(phi) * t1 + math.sin(phi) * t2))
-            weights.append(2 * k - 1)
-    weights = np.array(weights) / sum(weights)
+    samples, weights = mt.sun_disk(sun)
     total = np.zeros(len(wl))
     si = dr.zeros(mi.SurfaceInteraction3f)
     for w, d in zip(weights, samples):
