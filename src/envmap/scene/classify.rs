@@ -337,10 +337,7 @@ fn twilight_sky(
     let window_share = (daylight.iter())
         .map(|&(k, _)| candidates[k].e.stats.energy / levels.total_energy.max(f64::MIN_POSITIVE))
         .fold(0f64, f64::max);
-    let mut in_emitter = vec![false; cells.len()];
-    for &i in candidates.iter().flat_map(|c| c.e.cells.iter()) {
-        in_emitter[i] = true;
-    }
+    let in_emitter = emitter_mask(cells, candidates);
     let open = (window_share < ROOM_WINDOW_SHARE)
         .then(|| super::twilight::open_sky(cells, &in_emitter))
         .flatten();
@@ -382,6 +379,15 @@ fn twilight_sky(
     Ok(true)
 }
 
+/// Per cell: whether it belongs to one of the candidates.
+fn emitter_mask(cells: &Cells, candidates: &[Candidate]) -> Vec<bool> {
+    let mut in_emitter = vec![false; cells.len()];
+    for &i in candidates.iter().flat_map(|c| c.e.cells.iter()) {
+        in_emitter[i] = true;
+    }
+    in_emitter
+}
+
 /// Each candidate's cells.
 fn emitter_cells(candidates: &[Candidate]) -> Vec<&[usize]> {
     candidates.iter().map(|c| c.e.cells.as_slice()).collect()
@@ -401,10 +407,7 @@ fn sun_under_a_bluer_sky(cells: &Cells, candidates: &[Candidate]) -> Result<bool
     let Some(sun_k) = c.colour.cct_k.filter(|_| sun_like) else {
         return Ok(false);
     };
-    let mut in_emitter = vec![false; cells.len()];
-    for &i in candidates.iter().flat_map(|c| c.e.cells.iter()) {
-        in_emitter[i] = true;
-    }
+    let in_emitter = emitter_mask(cells, candidates);
     let sky: Vec<usize> = (0..cells.len())
         .filter(|&i| !in_emitter[i] && cells.direction(i)[1] > 0.0)
         .collect();
@@ -486,16 +489,16 @@ fn sky_light(
 }
 
 /// The luminance of the sky's and windows' bright parts: the 95th percentile of their cells.
-fn daylight_level(
+fn daylight_level<'a>(
     cells: &Cells,
     candidates: &[Candidate],
     daylight: &[(usize, LightKind)],
-    dim: &[Region],
+    dim: impl IntoIterator<Item = &'a Region>,
 ) -> f64 {
     let mut y: Vec<f32> = daylight
         .iter()
         .flat_map(|&(k, _)| candidates[k].e.cells.iter())
-        .chain(dim.iter().flat_map(|d| d.cells.iter()))
+        .chain(dim.into_iter().flat_map(|d| d.cells.iter()))
         .map(|&i| cells.y[i])
         .collect();
     if y.is_empty() {
@@ -694,14 +697,7 @@ fn outshining_the_sky(
     if sky_energy >= DUSK_SKY_SHARE * total_energy || (skies.is_empty() && dim_skies.is_empty()) {
         return;
     }
-    let mut y: Vec<f32> = (skies
-        .iter()
-        .flat_map(|&(k, _)| candidates[k].e.cells.iter()))
-    .chain(dim_skies.iter().flat_map(|d| d.cells.iter()))
-    .map(|&i| cells.y[i])
-    .collect();
-    y.sort_by(|a, b| a.total_cmp(b));
-    let level = y[(y.len() - 1) * 95 / 100] as f64;
+    let level = daylight_level(cells, candidates, &skies, dim_skies.iter().copied());
     daylight.retain(|&(k, kind)| {
         kind == LightKind::Sky
             || (k == 0 && blurred_sun)
@@ -767,12 +763,7 @@ fn dim_skies(
         .filter(|c| !is_window(c))
         .map(|c| c.e.stats.peak)
         .fold(0f64, f64::max);
-    let mut in_emitter = vec![false; cells.len()];
-    for c in emitters {
-        for &i in &c.e.cells {
-            in_emitter[i] = true;
-        }
-    }
+    let in_emitter = emitter_mask(cells, emitters);
     let mask: Vec<bool> = (0..cells.len())
         .map(|i| {
             !in_emitter[i]

@@ -12,6 +12,7 @@
 //! it above the horizon join it (see `classify`).
 
 use super::cells::Cells;
+use super::enclosure::median_luminance;
 use super::regions::{components, RegionStats};
 
 /// The zenith cap the sky is grown from (degrees of elevation and up).
@@ -34,12 +35,10 @@ pub(crate) fn open_sky(cells: &Cells, in_emitter: &[bool]) -> Option<(Vec<usize>
     let cap: Vec<usize> = (0..cells.len())
         .filter(|&i| free(i) && elevation(i) >= ZENITH_DEG)
         .collect();
-    let mut y: Vec<f32> = cap.iter().map(|&i| cells.y[i]).collect();
-    if y.is_empty() {
+    if cap.is_empty() {
         return None;
     }
-    y.sort_by(|a, b| a.total_cmp(b));
-    let zenith = y[y.len() / 2] as f64;
+    let zenith = median_luminance(cells, &cap);
     let (floor, ceiling) = (SKY_FLOOR * zenith, SKY_CEILING * zenith);
     let mask: Vec<bool> = (0..cells.len())
         .map(|i| {
