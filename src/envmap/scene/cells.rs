@@ -8,6 +8,7 @@
 use crate::colorimetry::RgbSpace;
 use crate::envmap::layout::{EnvMap, Layout};
 use nalgebra::{Matrix3, Vector3};
+use rayon::prelude::*;
 use std::f64::consts::PI;
 
 /// The widest lat-long analysed at its own resolution (wider maps are analysed at this width:
@@ -183,28 +184,104 @@ impl Cells {
 
 /// The solid-angle-weighted quantile `q` (0..1) of `values` over the cells.
 pub(crate) fn weighted_quantile(cells: &Cells, values: &[f32], q: f64) -> f64 {
-    // Cells of a row share their solid angle: sort (value, row) pairs once.
-    let mut v: Vec<(f32, f64)> = values
-        .iter()
+    // The values in `f32::total_cmp`'s order, ties in cell order (a stable sort's, so that the
+    // weights are summed in one order whatever the threads): one u64 key per cell, the value's
+    // order in the high half and the cell's index in the low, sorted in parallel.
+    let mut keys: Vec<u64> = values
+        .par_iter()
         .enumerate()
-        .map(|(i, &x)| (x, cells.omega(i)))
+        .map(|(i, &x)| (total_order_key(x) as u64) << 32 | i as u64)
         .collect();
-    v.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let total: f64 = v.iter().map(|p| p.1).sum();
+    keys.par_sort_unstable();
+    let value = |k: u64| from_total_order_key((k >> 32) as u32) as f64;
+    let omega = |k: u64| cells.omega((k & u32::MAX as u64) as usize);
+    let total: f64 = keys.iter().map(|&k| omega(k)).sum();
     let mut acc = 0.0;
-    for (x, w) in &v {
-        acc += w;
+    for &k in &keys {
+        acc += omega(k);
         if acc >= q * total {
-            return *x as f64;
+            return value(k);
         }
     }
-    v.last().map_or(0.0, |p| p.0 as f64)
+    keys.last().map_or(0.0, |&k| value(k))
+}
+
+/// An f32's bits as a u32 that orders as [`f32::total_cmp`] does: negatives (sign set) inverted,
+/// the rest with the sign bit set.
+fn total_order_key(x: f32) -> u32 {
+    let b = x.to_bits();
+    if b & 0x8000_0000 != 0 {
+        !b
+    } else {
+        b | 0x8000_0000
+    }
+}
+
+/// The f32 whose [`total_order_key`] is `k`.
+fn from_total_order_key(k: u32) -> f32 {
+    f32::from_bits(if k & 0x8000_0000 != 0 {
+        k & 0x7fff_ffff
+    } else {
+        !k
+    })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::envmap::RgbImage;
+
+    #[test]
+    fn the_total_order_key_orders_as_total_cmp_and_goes_back() {
+        let xs = [
+            f32::NEG_INFINITY,
+            -3.5,
+            -1e-40,
+            -0.0,
+            0.0,
+            1e-40,
+            1.0,
+            7e30,
+            f32::INFINITY,
+            f32::NAN,
+        ];
+        for a in xs {
+            assert_eq!(
+                from_total_order_key(total_order_key(a)).to_bits(),
+                a.to_bits()
+            );
+            for b in xs {
+                assert_eq!(
+                    total_order_key(a).cmp(&total_order_key(b)),
+                    a.total_cmp(&b),
+                    "{a} {b}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn the_weighted_quantile_is_the_value_where_the_solid_angle_crosses_it() {
+        // A 64 x 32 lat-long whose cells hold their row index: a quantile by solid angle is
+        // the first row where the sphere's area from the top reaches it (the quantiles chosen
+        // away from rows' edges: 0.37 is row 13.3 of 32, by (1 - cos theta) / 2).
+        let map = EnvMap::new(Layout::LatLong, RgbImage::new(64, 32)).unwrap();
+        let c = Cells::new(&map, &RgbSpace::SRGB, [1.0; 3]);
+        let values: Vec<f32> = (0..c.len()).map(|i| (i / c.width) as f32).collect();
+        let want = |q: f64| {
+            // The first row whose cumulative solid angle reaches q of the sphere.
+            let mut acc = 0.0;
+            (0..c.height)
+                .find(|&y| {
+                    acc += (0..c.width).map(|x| c.omega(y * c.width + x)).sum::<f64>();
+                    acc >= q * 4.0 * PI
+                })
+                .unwrap() as f64
+        };
+        for q in [0.05, 0.37, 0.9] {
+            assert_eq!(weighted_quantile(&c, &values, q), want(q), "q {q}");
+        }
+    }
 
     #[test]
     fn cells_are_the_maps_directions_and_solid_angles() {
