@@ -702,16 +702,7 @@ fn threads_split_the_work_and_write_the_same_pixels() {
             "64",
             "--quiet",
         ]);
-        let image = read_all_flat_layers_from_file(&out).unwrap();
-        let layer = &image.layer_data[0];
-        let mut channels: Vec<(String, Vec<f32>)> = layer
-            .channel_data
-            .list
-            .iter()
-            .map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect()))
-            .collect();
-        channels.sort_by(|a, b| a.0.cmp(&b.0));
-        channels
+        channels_of(&out)
     };
     let one = pixels("1");
     assert!(one.len() > 80, "{} channels", one.len());
@@ -720,4 +711,48 @@ fn threads_split_the_work_and_write_the_same_pixels() {
     let zero = specmap(&["convert", &input, "-o", "x.exr", "--threads", "0"]);
     assert_eq!(zero.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&zero.stderr).contains("--threads"));
+}
+
+/// Every channel of an OpenEXR file as f32, sorted by name (read by the `exr` crate).
+fn channels_of(path: &Path) -> Vec<(String, Vec<f32>)> {
+    let image = read_all_flat_layers_from_file(path).unwrap();
+    let mut channels: Vec<(String, Vec<f32>)> = image.layer_data[0]
+        .channel_data
+        .list
+        .iter()
+        .map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect()))
+        .collect();
+    channels.sort_by(|a, b| a.0.cmp(&b.0));
+    channels
+}
+
+/// Where the flags decide every pixel's light (one named light, `--sun off`) the scene is not
+/// analysed, and the pixels are those of the same conversion with the scene analysed (forest has
+/// no sun, so `--sun auto` finds none and changes nothing but the analysis).
+#[test]
+fn flags_that_decide_every_light_skip_the_analysis_and_write_the_same_pixels() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = sample("forest.exr");
+    for flags in [
+        &["--mode", "exact", "--light", "D65"][..],
+        &["--lights", "one", "--light", "A"][..],
+    ] {
+        let run = |sun: &str| {
+            let out = dir.path().join(format!("{sun}.exr"));
+            let o = out.to_str().unwrap();
+            let mut args = vec![input.as_str(), "-o", o, "--size", "64", "--sun", sun];
+            args.extend_from_slice(flags);
+            (convert_json(&args), channels_of(&out))
+        };
+        let (skipped, pixels) = run("off");
+        let (analysed, want) = run("auto");
+        let why = skipped["scene_not_analysed"].as_str().unwrap_or_default();
+        assert!(why.contains("not analysed"), "{flags:?}: {why:?}");
+        assert_eq!(skipped["lights"].as_array().map(Vec::len), Some(0));
+        assert!(analysed["scene_not_analysed"].is_null(), "{flags:?}");
+        assert!(!analysed["lights"].as_array().unwrap().is_empty());
+        assert_eq!(analysed["sun"]["found"], serde_json::Value::Bool(false));
+        assert!(pixels.len() > 80, "{} channels", pixels.len());
+        assert_eq!(pixels, want, "{flags:?}");
+    }
 }

@@ -1,18 +1,21 @@
 #!/usr/bin/env python3
 """Conversion speed and memory, specmap against the same conversion in Python, in one run.
 
-    .venv/bin/python tools/bench_convert.py [--big]
+    .venv/bin/python tools/bench_convert.py [--sizes]
 
 1. Throughput on envmaps/sunrise.exr and forest.exr (1024x512): `specmap convert` (release build,
    exact mode, D65, 380:780:5 = 81 bands + RGB + sun mask, half, ZIP, sun off so both do the same
-   work) against numpy + colour-science + OpenEXR doing the same: read, clamp, fit the exact-mode
-   matrix, expand every pixel to 81 bands, write half/ZIP. The two outputs are checked to hold the
-   same channels and values. Wall-clock seconds, best of 3; specmap on all cores and on one
-   (RAYON_NUM_THREADS=1), and with --zip-level 1.
-2. The compressions, on sunrise: ZIP, ZIPS, PIZ and none, specmap and OpenEXR's Python binding
-   writing the same spectra: seconds (best of 3) and file size.
-3. With --big: an 8192x4096 input (sunrise upsampled 8x, half, ZIP) converted by specmap under
-   /usr/bin/time: peak resident memory and throughput.
+   work; the flags decide every light, so specmap analyses no scene) against numpy +
+   colour-science + OpenEXR doing the same: read, clamp, fit the exact-mode matrix, expand every
+   pixel to 81 bands, write half/ZIP. The two outputs are checked to hold the same channels and
+   values. Wall-clock seconds, best of 3; specmap on all cores and on one (--threads 1), with
+   the stages its report times.
+2. The compressions, on sunrise: ZIP, ZIPS, PIZ and none, specmap (all cores and one) and
+   OpenEXR's Python binding writing the same spectra: seconds (best of 3) and file size.
+3. The default conversion (the scene analysed), all cores and one.
+4. With --sizes: sunrise upsampled to 2048x1024, 4096x2048 and 8192x4096 (half, ZIP), converted
+   with ZIP and without compression under /usr/bin/time: wall time, peak resident memory,
+   output size.
 """
 import json
 import os
@@ -108,76 +111,121 @@ def best_of(n, f):
 CPU_USED = 0.0
 
 
-def specmap(src, dst, *extra, threads=None):
-    """Runs specmap convert (its report, from --json)."""
-    env = dict(os.environ, **({"RAYON_NUM_THREADS": str(threads)} if threads else {}))
-    p = subprocess.run([BIN, "convert", src, "-o", dst, *ARGS, *extra, "--json"], check=True,
-                       capture_output=True, text=True, env=env)
+def specmap(src, dst, *extra, threads=None, args=ARGS):
+    """Runs specmap convert on `threads` threads (None: all cores); its report, from --json."""
+    t = ["--threads", str(threads)] if threads else []
+    p = subprocess.run([BIN, "convert", src, "-o", dst, *args, *t, *extra, "--json"], check=True,
+                       capture_output=True, text=True)
     return json.loads(p.stdout)
+
+
+def stages(r):
+    """Where the time went, from specmap's report: its stages' wall-clock seconds."""
+    return (f"read {r['seconds_read']:.2f}, analyse {r['seconds_analyse']:.2f}, plan "
+            f"{r['seconds_plan']:.2f}, write {r['seconds_convert']:.2f} (encoding "
+            f"{r['seconds_encode']:.2f})")
+
+
+def timed(cmd):
+    """Runs cmd under /usr/bin/time: (wall seconds, peak resident MiB)."""
+    p = subprocess.run(["/usr/bin/time", "-f", "%e %M", *map(str, cmd)], capture_output=True,
+                       text=True, check=True)
+    wall, rss = p.stderr.strip().splitlines()[-1].split()
+    return float(wall), int(rss) / 1024
+
+
+def throughput(tmp, cores):
+    """The issue's conversion (exact, D65, sun off, half, ZIP) of the two sample maps: specmap on
+    every core and on one, against the Python pipeline timed in the same run."""
+    mpix = 1024 * 512 / 1e6
+    print(f"| input, ZIP | specmap, {cores} threads | specmap, 1 thread | {cores} threads / 1 "
+          "| Python (numpy + colour-science + OpenEXR) | specmap / Python | specmap's stages, "
+          f"{cores} threads (s) |")
+    print("|---|---:|---:|---:|---:|---:|---|")
+    for name in ("sunrise", "forest"):
+        src = ROOT / "envmaps" / f"{name}.exr"
+        ours, report = best_of(3, lambda: specmap(src, tmp / "ours.exr"))
+        ours_cpu = CPU_USED
+        size = (tmp / "ours.exr").stat().st_size
+        one, _ = best_of(3, lambda: specmap(src, tmp / "one.exr", threads=1))
+        theirs, write = best_of(3, lambda: python_convert(src, tmp / "theirs.exr"))
+        their_cpu = CPU_USED
+        same_output(tmp / "ours.exr", tmp / "theirs.exr")
+        print(f"| {name}.exr 1024x512 | {ours:.2f} s ({mpix / ours:.2f} Mpix/s; "
+              f"{size / 1e6:.1f} MB; CPU {ours_cpu:.2f} s) | {one:.2f} s | {one / ours:.2f}x "
+              f"| {theirs:.2f} s (OpenEXR write {write / theirs:.0%}; CPU {their_cpu:.2f} s) "
+              f"| {theirs / ours:.1f}x | {stages(report)} |")
+
+
+def compressions(tmp, cores):
+    """Each compression of sunrise's conversion: specmap on every core and on one, and OpenEXR's
+    Python binding writing the same spectra."""
+    mpix = 1024 * 512 / 1e6
+    print(f"\n| sunrise.exr | specmap, {cores} threads | specmap, 1 thread | {cores} threads / 1 "
+          "| Python conversion (its OpenEXR write alone) | specmap / Python | specmap's stages, "
+          f"{cores} threads (s) |")
+    print("|---|---:|---:|---:|---:|---:|---|")
+    src = ROOT / "envmaps" / "sunrise.exr"
+    for c in COMPRESSIONS:
+        ours, report = best_of(3, lambda: specmap(src, tmp / "ours.exr", "--compression", c))
+        ours_cpu = CPU_USED
+        size = (tmp / "ours.exr").stat().st_size
+        one, _ = best_of(3, lambda: specmap(src, tmp / "one.exr", "--compression", c, threads=1))
+        theirs, write = best_of(3, lambda: python_convert(src, tmp / "theirs.exr", c))
+        same_output(tmp / "ours.exr", tmp / "theirs.exr")
+        print(f"| {c.upper()}, {size / 1e6:.1f} MB | {ours:.2f} s ({mpix / ours:.2f} Mpix/s; CPU "
+              f"{ours_cpu:.2f} s) | {one:.2f} s | {one / ours:.2f}x | {theirs:.2f} s "
+              f"({write:.2f} s) | {theirs / ours:.1f}x | {stages(report)} |")
+
+
+def default_flags(tmp, cores):
+    """The default conversion (faithful, every light found, sun found): the scene analysed."""
+    src = ROOT / "envmaps" / "sunrise.exr"
+    ours, report = best_of(3, lambda: specmap(src, tmp / "ours.exr", args=["--quiet"]))
+    one, _ = best_of(3, lambda: specmap(src, tmp / "one.exr", threads=1, args=["--quiet"]))
+    print(f"\nDefault flags, sunrise.exr: {ours:.2f} s on {cores} threads, {one:.2f} s on 1 "
+          f"({one / ours:.2f}x); stages on {cores}: {stages(report)}")
+
+
+def sizes(tmp, cores):
+    """Sunrise upsampled 1x, 2x, 4x and 8x (to 8192x4096, 33.5 Mpixel; half, ZIP): wall time and
+    peak memory (/usr/bin/time), output size, for ZIP and no compression."""
+    with OpenEXR.File(str(ROOT / "envmaps" / "sunrise.exr"), separate_channels=True) as f:
+        ch = {c: v.pixels.astype(np.float32) for c, v in f.channels().items() if c in "RGB"}
+    print(f"\n| size, {cores} threads | compression | wall | Mpix/s | peak memory | output "
+          "| specmap's stages (s) |")
+    print("|---|---|---:|---:|---:|---:|---|")
+    for k in (1, 2, 4, 8):
+        big = {c: np.kron(v, np.ones((k, k), np.float32)).astype(np.float16)
+               for c, v in ch.items()}
+        src = tmp / f"sunrise{k}x.exr"
+        with OpenEXR.File({"compression": OpenEXR.ZIP_COMPRESSION,
+                           "type": OpenEXR.scanlineimage}, big) as f:
+            f.write(str(src))
+        del big
+        w, h = 1024 * k, 512 * k
+        for c in ("zip", "none"):
+            out = tmp / "big.spectral.exr"
+            wall, rss = timed([BIN, "convert", src, "-o", out, *ARGS, "--compression", c])
+            size = out.stat().st_size
+            report = specmap(src, out, "--compression", c) if k < 8 else None
+            out.unlink()
+            print(f"| {w}x{h} | {c.upper()} | {wall:.2f} s | {w * h / 1e6 / wall:.2f} "
+                  f"| {rss:.0f} MiB | {size / 1e9:.2f} GB "
+                  f"| {stages(report) if report else 'one run (see wall)'} |")
+        src.unlink()
 
 
 def main():
     subprocess.run(["cargo", "build", "--release", "-q"], cwd=ROOT, check=True)
     cores = os.cpu_count()
-    mpix = 1024 * 512 / 1e6
     with tempfile.TemporaryDirectory() as tmp:
         tmp = pathlib.Path(tmp)
-        print(f"| input | specmap, {cores} threads | specmap, 1 thread | specmap, --zip-level 1 "
-              "| Python (numpy + colour-science + OpenEXR) | ratio | ratio, 1 thread |")
-        print("|---|---:|---:|---:|---:|---:|---:|")
-        for name in ("sunrise", "forest"):
-            src = ROOT / "envmaps" / f"{name}.exr"
-            ours, _ = best_of(3, lambda: specmap(src, tmp / "ours.exr"))
-            ours_cpu = CPU_USED
-            size = (tmp / "ours.exr").stat().st_size
-            one, _ = best_of(3, lambda: specmap(src, tmp / "one.exr", threads=1))
-            fast, _ = best_of(3, lambda: specmap(src, tmp / "fast.exr", "--zip-level", "1"))
-            fast_size = (tmp / "fast.exr").stat().st_size
-            theirs, write = best_of(3, lambda: python_convert(src, tmp / "theirs.exr"))
-            their_cpu = CPU_USED
-            their_size = (tmp / "theirs.exr").stat().st_size
-            same_output(tmp / "ours.exr", tmp / "theirs.exr")
-            same_output(tmp / "fast.exr", tmp / "theirs.exr")
-            print(f"| {name}.exr 1024x512 | {ours:.2f} s ({mpix / ours:.2f} Mpix/s; "
-                  f"{size / 1e6:.1f} MB; CPU {ours_cpu:.2f} s) | {one:.2f} s "
-                  f"| {fast:.2f} s ({fast_size / 1e6:.1f} MB) | {theirs:.2f} s ({mpix / theirs:.2f} "
-                  f"Mpix/s; OpenEXR write {write / theirs:.0%}; {their_size / 1e6:.1f} MB; CPU "
-                  f"{their_cpu:.2f} s) "
-                  f"| {theirs / ours:.1f}x | {theirs / one:.1f}x |")
-        print(f"\n| sunrise.exr, compression | specmap, {cores} threads | OpenEXR's Python binding "
-              "(whole Python conversion; its write alone) | ratio |")
-        print("|---|---:|---:|---:|")
-        src = ROOT / "envmaps" / "sunrise.exr"
-        for c in COMPRESSIONS:
-            ours, _ = best_of(3, lambda: specmap(src, tmp / "ours.exr", "--compression", c))
-            ours_cpu = CPU_USED
-            size = (tmp / "ours.exr").stat().st_size
-            theirs, write = best_of(3, lambda: python_convert(src, tmp / "theirs.exr", c))
-            their_cpu = CPU_USED
-            their_size = (tmp / "theirs.exr").stat().st_size
-            same_output(tmp / "ours.exr", tmp / "theirs.exr")
-            print(f"| {c.upper()} | {ours:.2f} s ({mpix / ours:.2f} Mpix/s; CPU {ours_cpu:.2f} s), "
-                  f"{size / 1e6:.1f} MB | {theirs:.2f} s (write {write:.2f} s; CPU "
-                  f"{their_cpu:.2f} s), {their_size / 1e6:.1f} MB | {theirs / ours:.1f}x |")
-        if "--big" in sys.argv:
-            with OpenEXR.File(str(ROOT / "envmaps" / "sunrise.exr"), separate_channels=True) as f:
-                ch = f.channels()
-                big = {c: np.kron(ch[c].pixels, np.ones((8, 8), np.float32)).astype(np.float16)
-                       for c in "RGB"}
-            src = tmp / "big.exr"
-            with OpenEXR.File({"compression": OpenEXR.ZIP_COMPRESSION,
-                               "type": OpenEXR.scanlineimage}, big) as f:
-                f.write(str(src))
-            del big
-            p = subprocess.run(["/usr/bin/time", "-v", BIN, "convert", src, "-o", tmp / "big.spectral.exr",
-                                *ARGS], capture_output=True, text=True, check=True)
-            rss = int(re.search(r"Maximum resident set size \(kbytes\): (\d+)", p.stderr).group(1))
-            wall = re.search(r"Elapsed \(wall clock\) time.*: (\S+)", p.stderr).group(1)
-            parts = [float(x) for x in wall.split(":")]
-            secs = sum(v * 60 ** i for i, v in enumerate(reversed(parts)))
-            size = (tmp / "big.spectral.exr").stat().st_size
-            print(f"\n8192x4096 -> 81 bands half ZIP: peak RSS {rss / 1024:.0f} MiB, {secs:.1f} s "
-                  f"({8192 * 4096 / 1e6 / secs:.2f} Mpix/s), output {size / 1e9:.2f} GB")
+        throughput(tmp, cores)
+        compressions(tmp, cores)
+        default_flags(tmp, cores)
+        if "--sizes" in sys.argv:
+            sizes(tmp, cores)
 
 
 if __name__ == "__main__":

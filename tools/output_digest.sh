@@ -44,6 +44,9 @@ cases=(
   "cube|--out-layout cube --size 64"
   "tolerance|--tolerance 1"
   "space|--space acescg --range 400:700:10"
+  "flags-exact|--mode exact --light D65 --sun off"
+  "flags-one|--lights one --light A --sun off"
+  "flags-none|--mode nonneg --light FL2 --sun off --compression none"
 )
 for map in sunrise forest; do
   for c in "${cases[@]}"; do

@@ -665,9 +665,11 @@ fn write_round_trip(out: &mut String, r: &ConvertReport) {
     );
     outln!(
         out,
-        "  time         read {:.2} s, convert + write {:.2} s (EXR encoding {:.2} s): {:.1} \
-         input Mpixel/s",
+        "  time         read {:.2} s, analyse {:.2} s, plan {:.2} s, convert + write {:.2} s \
+         (EXR encoding {:.2} s): {:.1} input Mpixel/s",
         r.seconds_read,
+        r.seconds_analyse,
+        r.seconds_plan,
         r.seconds_convert,
         r.seconds_encode,
         r.megapixels_per_second
@@ -676,7 +678,10 @@ fn write_round_trip(out: &mut String, r: &ConvertReport) {
 
 /// The lights lines of the report: each light of the scene, or the main light.
 fn write_lights(out: &mut String, r: &convert::ConvertReport) {
-    light_lines(out, &r.lights, &r.bright_reflectors);
+    match &r.scene_not_analysed {
+        Some(why) => outln!(out, "  scene        {why}"),
+        None => light_lines(out, &r.lights, &r.bright_reflectors),
+    }
     match &r.light_choice {
         Some(c) => outln!(out, "  main light   {} (auto: {})", r.light, c.reason),
         None if r.lights_mode == Lights::One || r.mode != "faithful" => {

@@ -24,12 +24,55 @@ pub struct Analysis {
     pub light_choice: Option<LightChoice>,
     /// What RGB (1,1,1) is taken to be, and why.
     pub white: WhiteChoice,
+    /// Why the scene was not analysed (the flags decide every pixel's light); None: it was.
+    pub not_analysed: Option<String>,
+    /// Seconds this stage took.
+    pub seconds: f64,
+}
+
+/// Why a write needs no scene analysis: one named light carries every pixel (the paper's modes,
+/// or `--lights one`) and there is no sun to find. None: the write needs the analysis.
+pub(crate) fn decided_by_flags(opts: &ConvertOptions) -> Option<String> {
+    let LightSpec::Named(name) = &opts.light else {
+        return None;
+    };
+    let one = opts.method == Method::Basis || opts.lights == Lights::One;
+    (one && opts.sun.is_none()).then(|| {
+        format!(
+            "not analysed: --light {name} carries every pixel and --sun off leaves no sun to \
+             find (inspect analyses it)"
+        )
+    })
+}
+
+/// The analysis a write needs: the whole of [`analyse`], or where the flags decide every light
+/// ([`decided_by_flags`]) only the white premise, over a scene left unanalysed.
+pub(crate) fn analyse_for_write(input: &Input, opts: &ConvertOptions) -> Result<Analysis> {
+    match decided_by_flags(opts) {
+        Some(why) => {
+            let t0 = std::time::Instant::now();
+            let LightSpec::Named(light) = &opts.light else {
+                unreachable!("decided_by_flags names the light")
+            };
+            let scene = Scene::unanalysed(&input.map, &input.space.space, opts.reflectors);
+            Ok(Analysis {
+                scene,
+                light: light.clone(),
+                light_choice: None,
+                white: white_premise(input, opts, light, true)?,
+                not_analysed: Some(why),
+                seconds: t0.elapsed().as_secs_f64(),
+            })
+        }
+        None => analyse(input, opts),
+    }
 }
 
 /// Analyses the map: its lights, then what RGB (1,1,1) is, then (for one light) the main light.
 /// Under the light premise the scene is analysed again in true colours. The map is looked at,
 /// never changed: what the premise does to it is the plan's (see [`super::plan`]).
 pub(crate) fn analyse(input: &Input, opts: &ConvertOptions) -> Result<Analysis> {
+    let t0 = std::time::Instant::now();
     let space = input.space.space;
     let settings = SceneSettings {
         sun: opts.sun,
@@ -61,6 +104,8 @@ pub(crate) fn analyse(input: &Input, opts: &ConvertOptions) -> Result<Analysis> 
         light,
         light_choice,
         white,
+        not_analysed: None,
+        seconds: t0.elapsed().as_secs_f64(),
     })
 }
 

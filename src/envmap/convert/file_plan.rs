@@ -2,15 +2,14 @@
 //! intermediate), its precision and EV scale, compression and header attributes, and where.
 
 use crate::envmap::convert::analyse::Analysis;
+use crate::envmap::convert::measure::Measured;
 use crate::envmap::convert::options::mode_name;
 use crate::envmap::convert::options::{ConvertOptions, OutputFormat};
 use crate::envmap::convert::pixel_spectra::WhitePremise;
-use crate::envmap::convert::pixels::{PixelPlan, Pixels};
+use crate::envmap::convert::pixels::PixelPlan;
 use crate::envmap::convert::planning::SpectraPlan;
-use crate::envmap::convert::read::Input;
 use crate::envmap::convert::sun_report::SunReport;
 use crate::envmap::files::{AttrValue, Compression, Precision, HALF_MAX};
-use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 
 /// What is written, where and how.
@@ -53,22 +52,16 @@ pub enum Output {
 
 /// Plans the file of a conversion whose spectra are planned (`s`) for the map as written.
 pub(crate) fn plan_file(
-    input: &Input,
     analysis: &Analysis,
     s: &SpectraPlan,
     opts: &ConvertOptions,
+    measured: Option<&Measured>,
     path: Option<&Path>,
     notes: &mut Vec<String>,
 ) -> FilePlan {
     let output = match opts.format {
         OutputFormat::Spectral => {
-            let px = Pixels {
-                map: &input.map,
-                cells: &analysis.scene.cells,
-                plan: &s.pixels,
-                mode: s.fit.mode,
-            };
-            let precision = spectral_precision(&px, s.grid.len(), opts.precision);
+            let precision = spectral_precision(measured, opts.precision);
             notes.extend(precision.reason.clone());
             if precision.below_half > 0 {
                 notes.push(format!(
@@ -146,40 +139,15 @@ pub struct Precisions {
     pub reason: Option<String>,
 }
 
-/// The EV scale for half floats: the peak of every value written, and how many pixels an EV
-/// scale would flush to zero. A scale that would flush pixels that half holds unscaled makes the
-/// file float instead (nothing is lost silently).
-fn spectral_precision(px: &Pixels, bands: usize, asked: Precision) -> Precisions {
-    if asked == Precision::Float {
+/// The EV scale for half floats from the measure of every value written (`measured`; None
+/// where float was asked): its peak, and how many pixels an EV scale would flush to zero. A
+/// scale that would flush pixels that half holds unscaled makes the file float instead (nothing
+/// is lost silently).
+fn spectral_precision(measured: Option<&Measured>, asked: Precision) -> Precisions {
+    let Some(Measured { peak, bins, .. }) = measured.filter(|_| asked != Precision::Float) else {
         return Precisions::float();
-    }
-    let map = px.map;
-    let width = map.image.width;
-    // Per pixel: its largest magnitude, binned by binary exponent.
-    let (peak, bins) = (0..map.image.height)
-        .into_par_iter()
-        .map(|y| {
-            let mut out = vec![0f32; bands];
-            let mut bins = [0usize; 300];
-            let mut peak = 0f32;
-            for x in 0..width {
-                if map.direction(x, y).is_none() {
-                    continue;
-                }
-                px.spectrum(x, y, &mut out);
-                let rgb = map.image.get(x, y);
-                let p = out.iter().chain(&rgb).fold(0f32, |m, v| m.max(v.abs()));
-                peak = peak.max(p);
-                if p > 0.0 && p.is_finite() {
-                    bins[(p.log2().floor() as i32 + 150).clamp(0, 299) as usize] += 1;
-                }
-            }
-            (peak, bins)
-        })
-        .reduce(
-            || (0f32, [0usize; 300]),
-            |a, b| (a.0.max(b.0), std::array::from_fn(|k| a.1[k] + b.1[k])),
-        );
+    };
+    let peak = *peak;
     // Half's smallest subnormal is 2^-24: values below 2^-25 round to 0.
     let flushed =
         |ev: i32| -> usize { bins[..(ev - 25 + 150).clamp(0, 300) as usize].iter().sum() };

@@ -31,6 +31,7 @@ pub(crate) mod carrier_plan;
 pub(crate) mod carriers;
 pub(crate) mod coefficient_rows;
 pub(crate) mod file_plan;
+pub(crate) mod measure;
 pub(crate) mod options;
 pub(crate) mod own_basis;
 pub mod pixel_spectra;
@@ -45,6 +46,7 @@ pub(crate) mod write;
 
 pub use analyse::Analysis;
 pub use file_plan::{FilePlan, Output, Precisions};
+pub use measure::SpectraCount;
 pub use options::{
     input_files, mode_name, ConvertOptions, LightSpec, Lights, Method, OutputFormat, SkySpd,
     SunSpd, WhiteSpec, MAX_BANDS, MAX_INPUT,
@@ -53,7 +55,7 @@ pub use pixels::PixelPlan;
 pub use plan::Plan;
 pub use report::{ConvertReport, Inspection};
 pub use sun_report::{SunFound, SunReport};
-pub use write::{SpectraCount, WriteStats};
+pub use write::WriteStats;
 
 use crate::data;
 use crate::error::{Error, Result};
@@ -77,7 +79,7 @@ pub fn convert(
 ) -> Result<ConvertReport> {
     check_before(input, output, opts)?;
     let read = read::read(input, opts)?;
-    let analysis = analyse::analyse(&read, opts)?;
+    let analysis = analyse::analyse_for_write(&read, opts)?;
     let plan = plan::plan(read, &analysis, opts, Some(output))?;
     let written = write::write(&plan, &analysis.scene.cells, progress)?;
     Ok(ConvertReport::new(input, &analysis, &plan, written))
@@ -143,7 +145,7 @@ fn to_memory(
         precision: crate::envmap::files::Precision::Float,
         ..opts.clone()
     };
-    let analysis = analyse::analyse(&read, opts)?;
+    let analysis = analyse::analyse_for_write(&read, opts)?;
     let plan = plan::plan(read, &analysis, opts, None)?;
     let (written, planes) = write::in_memory(&plan, &analysis.scene.cells, progress)?;
     let image = &plan.input.map.image;

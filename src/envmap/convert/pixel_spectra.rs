@@ -265,6 +265,17 @@ impl Combination {
     }
 }
 
+/// A pixel's spectrum decided before it is computed ([`Engine::decide`]).
+#[derive(Debug, Clone, Copy)]
+enum Chosen {
+    /// The sun's SPD times `scale` (in f32, as written), of luminance `luminance`.
+    Sun { scale: f32, luminance: f64 },
+    /// The CIE daylight basis with these coefficients.
+    Daylight(Vector3<f64>),
+    /// The ColorChecker basis with these coefficients.
+    Colorchecker(Vector3<f64>),
+}
+
 /// What one pixel became.
 #[derive(Debug, Clone, Copy)]
 pub struct PixelResult {
@@ -690,73 +701,134 @@ impl Engine {
     /// Writes the pixel's spectral radiance into `out` (one value per output wavelength) and
     /// returns its RGB back and luminance.
     pub fn spectrum(&self, rgb: [f32; 3], kind: PixelKind, out: &mut [f32]) -> PixelResult {
-        let premise_back = |back: Vector3<f64>| -> [f64; 3] {
-            match self.model.white {
-                WhitePremise::Light => back.component_div(&self.light_rgb).into(),
-                WhitePremise::Space => back.into(),
-            }
-        };
-        if kind == PixelKind::Sun {
-            if let Some((sun, sun_rgb)) = &self.sun {
-                let c = self.coefficients(rgb, true);
-                if c[3] > 0.0 {
-                    let s = c[3] as f32;
-                    for (o, v) in out.iter_mut().zip(sun) {
-                        *o = s * v;
-                    }
-                    return PixelResult {
-                        rgb_back: premise_back(sun_rgb * c[3]),
-                        luminance: c[3],
-                        negative: sun.iter().any(|&v| v < 0.0),
-                        took: Took::Sun,
-                        combination: Combination {
-                            first: TABLE_SUN,
-                            count: 1,
-                            weights: [s, 0.0, 0.0],
-                        },
-                    };
-                }
+        match self.decide(rgb, kind) {
+            Some(chosen) => self.write_chosen(chosen, out),
+            None => self.smooth_or_colorchecker(rgb, out),
+        }
+    }
+
+    /// Whether a pixel's kind can change its spectrum: the engine has a sun's SPD or a daylight
+    /// sky (else every pixel is taken as plain).
+    pub fn looks_at_kind(&self) -> bool {
+        self.sun.is_some() || self.daylight.is_some()
+    }
+
+    /// The pixel's spectrum as a combination of [`Engine::spectra_table`], without computing
+    /// it: what [`Engine::spectrum`] returns as `combination`. None where the smooth model is in
+    /// use, which chooses by looking at the spectrum.
+    pub fn combination(&self, rgb: [f32; 3], kind: PixelKind) -> Option<Combination> {
+        self.decide(rgb, kind).map(|c| match c {
+            Chosen::Sun { scale, .. } => Combination {
+                first: TABLE_SUN,
+                count: 1,
+                weights: [scale, 0.0, 0.0],
+            },
+            Chosen::Daylight(a) => Combination::of(TABLE_DAYLIGHT, &a),
+            Chosen::Colorchecker(a) => Combination::of(TABLE_COLORCHECKER, &a),
+        })
+    }
+
+    /// The spectrum a pixel takes where no choice needs the spectrum itself: the sun's SPD for
+    /// a sun pixel, daylight for a daylight-coloured sky pixel, else the ColorChecker basis
+    /// unless the smooth model is in use (None: it chooses).
+    fn decide(&self, rgb: [f32; 3], kind: PixelKind) -> Option<Chosen> {
+        if kind == PixelKind::Sun && self.sun.is_some() {
+            let c = self.coefficients(rgb, true);
+            if c[3] > 0.0 {
+                return Some(Chosen::Sun {
+                    scale: c[3] as f32,
+                    luminance: c[3],
+                });
             }
         }
         let r = self.true_rgb(rgb);
         if kind != PixelKind::Plain {
             if let Some(d) = &self.daylight {
                 if self.is_daylight_coloured(&r) {
-                    let a = d.inv * r;
-                    let negative = d.write(&a, out);
-                    return PixelResult {
-                        rgb_back: premise_back(d.rgb * a),
-                        luminance: d.luminance(&a),
-                        negative,
-                        took: Took::Daylight,
-                        combination: Combination::of(TABLE_DAYLIGHT, &a),
-                    };
+                    return Some(Chosen::Daylight(d.inv * r));
                 }
             }
         }
-        let mcc = Vector3::from(self.colorchecker(rgb));
-        if let Some(s) = &self.smooth {
-            let a = s.inv * r;
-            // The ColorChecker basis only where it stays non-negative and the smooth one does
-            // not; otherwise the smooth one, the less negative of the two.
-            let negative = s.write(&a, out);
-            let use_smooth = !negative || {
-                let cc = relative_min(&self.basis, &mcc);
-                cc < -NEGATIVE_TOLERANCE && cc <= relative_min(&s.spectra, &a)
-            };
-            if use_smooth {
-                return PixelResult {
-                    rgb_back: premise_back(s.rgb * a),
-                    luminance: s.luminance(&a),
-                    negative,
-                    took: Took::Smooth,
-                    combination: Combination::of(TABLE_SMOOTH, &a),
-                };
-            }
+        match self.smooth {
+            Some(_) => None,
+            None => Some(Chosen::Colorchecker(Vector3::from(self.colorchecker(rgb)))),
         }
+    }
+
+    /// The RGB of a spectrum back under the white premise (compare with the input).
+    fn premise_back(&self, back: Vector3<f64>) -> [f64; 3] {
+        match self.model.white {
+            WhitePremise::Light => back.component_div(&self.light_rgb).into(),
+            WhitePremise::Space => back.into(),
+        }
+    }
+
+    /// Writes a decided spectrum into `out`.
+    fn write_chosen(&self, chosen: Chosen, out: &mut [f32]) -> PixelResult {
+        match chosen {
+            Chosen::Sun { scale, luminance } => {
+                let (sun, sun_rgb) = self.sun.as_ref().expect("decided only with a sun");
+                for (o, v) in out.iter_mut().zip(sun) {
+                    *o = scale * v;
+                }
+                PixelResult {
+                    rgb_back: self.premise_back(sun_rgb * luminance),
+                    luminance,
+                    negative: sun.iter().any(|&v| v < 0.0),
+                    took: Took::Sun,
+                    combination: Combination {
+                        first: TABLE_SUN,
+                        count: 1,
+                        weights: [scale, 0.0, 0.0],
+                    },
+                }
+            }
+            Chosen::Daylight(a) => {
+                let d = self.daylight.as_ref().expect("decided only with daylight");
+                let negative = d.write(&a, out);
+                PixelResult {
+                    rgb_back: self.premise_back(d.rgb * a),
+                    luminance: d.luminance(&a),
+                    negative,
+                    took: Took::Daylight,
+                    combination: Combination::of(TABLE_DAYLIGHT, &a),
+                }
+            }
+            Chosen::Colorchecker(mcc) => self.colorchecker_result(mcc, out),
+        }
+    }
+
+    /// The smooth model where it stays non-negative or the ColorChecker basis goes more
+    /// negative; else the ColorChecker basis.
+    fn smooth_or_colorchecker(&self, rgb: [f32; 3], out: &mut [f32]) -> PixelResult {
+        let r = self.true_rgb(rgb);
+        let mcc = Vector3::from(self.colorchecker(rgb));
+        let s = self.smooth.as_ref().expect("decided unless smooth");
+        let a = s.inv * r;
+        // The ColorChecker basis only where it stays non-negative and the smooth one does
+        // not; otherwise the smooth one, the less negative of the two.
+        let negative = s.write(&a, out);
+        let use_smooth = !negative || {
+            let cc = relative_min(&self.basis, &mcc);
+            cc < -NEGATIVE_TOLERANCE && cc <= relative_min(&s.spectra, &a)
+        };
+        if use_smooth {
+            return PixelResult {
+                rgb_back: self.premise_back(s.rgb * a),
+                luminance: s.luminance(&a),
+                negative,
+                took: Took::Smooth,
+                combination: Combination::of(TABLE_SMOOTH, &a),
+            };
+        }
+        self.colorchecker_result(mcc, out)
+    }
+
+    /// The ColorChecker basis with coefficients `mcc`, written into `out`.
+    fn colorchecker_result(&self, mcc: Vector3<f64>, out: &mut [f32]) -> PixelResult {
         let negative = write_combination(&self.basis, &mcc, out);
         PixelResult {
-            rgb_back: premise_back(self.basis_rgb * mcc),
+            rgb_back: self.premise_back(self.basis_rgb * mcc),
             luminance: (0..3).map(|j| mcc[j] * self.basis_y[j]).sum(),
             negative,
             took: Took::Colorchecker,
@@ -836,6 +908,49 @@ mod tests {
                 k * y
             );
         }
+    }
+
+    #[test]
+    fn the_combination_decided_without_the_spectrum_is_the_one_written() {
+        // The paper's engine with a sun and daylight sky: every choice is made without the
+        // spectrum, so `combination` must name exactly what `spectrum` writes.
+        let model = Model {
+            white: WhitePremise::Light,
+            sky_daylight: true,
+            smooth: false,
+        };
+        let d65 = data::spectrum("D65").unwrap().data;
+        let e = faithful("D65", model, SunSource::Spd(&d65));
+        let table = e.spectra_table();
+        let mut out = vec![0f32; e.grid().len()];
+        let mut seen = std::collections::HashSet::new();
+        for (i, kind) in [PixelKind::Plain, PixelKind::Sky, PixelKind::Sun]
+            .into_iter()
+            .enumerate()
+        {
+            for k in 0..200u32 {
+                // Greys, saturated colours, dark and bright values, and negatives.
+                let f = |j: u32| ((k * 37 + j * 101 + i as u32 * 7) % 97) as f32 / 48.0 - 0.1;
+                let rgb = [f(0) * 3.0, f(1) * 3.0, f(2) * 3.0];
+                let r = e.spectrum(rgb, kind, &mut out);
+                let c = e.combination(rgb, kind).expect("no smooth model");
+                assert_eq!(c, r.combination, "{rgb:?} {kind:?}");
+                seen.insert(format!("{:?}", r.took));
+                for (b, &v) in out.iter().enumerate() {
+                    let w: f32 =
+                        (0..c.count).fold(0.0, |s, j| s + c.weights[j] * table[c.first + j][b]);
+                    assert_eq!(v, w, "{rgb:?} {kind:?} band {b}");
+                }
+            }
+        }
+        assert_eq!(
+            seen.len(),
+            3,
+            "sun, daylight and ColorChecker pixels: {seen:?}"
+        );
+        // The smooth model chooses by the spectrum: no combination without it.
+        let smooth = faithful("D65", FAITHFUL, SunSource::None);
+        assert_eq!(smooth.combination([0.2, 0.3, 0.4], PixelKind::Plain), None);
     }
 
     #[test]

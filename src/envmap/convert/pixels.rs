@@ -1,8 +1,8 @@
 //! How pixels become spectra: the plan's per-pixel engine ([`PixelPlan`]: the paper's basis or
 //! the faithful method's carriers) and one pixel's spectrum, whichever it is ([`Pixels`]).
 
-use crate::envmap::convert::carriers::{Assign, CarrierEngine, Written};
-use crate::envmap::convert::pixel_spectra::{Engine, PixelKind, Took};
+use crate::envmap::convert::carriers::{self, Assign, CarrierEngine, Written};
+use crate::envmap::convert::pixel_spectra::{Engine, PixelKind, PixelResult, Took};
 use crate::envmap::layout::EnvMap;
 use crate::envmap::roundtrip::metric::RgbMetric;
 use crate::envmap::scene::Cells;
@@ -25,6 +25,27 @@ pub enum PixelPlan {
         /// Per analysis cell, its carrier and what it is (sun, daylight, clipped lamp).
         assign: Vec<Assign>,
     },
+}
+
+/// What a pixel's spectrum is, beyond what it took: below zero somewhere, the sun's.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Flags {
+    pub negative: bool,
+    pub is_sun: bool,
+}
+
+/// What the paper's engine wrote for a pixel of `kind`, as the tally takes it.
+pub(crate) fn basis_written(r: &PixelResult, kind: PixelKind) -> (Written, Flags) {
+    let w = Written {
+        rgb_back: r.rgb_back,
+        took: r.took,
+        exact: true,
+    };
+    let flags = Flags {
+        negative: r.negative,
+        is_sun: kind == PixelKind::Sun && r.took == Took::Sun,
+    };
+    (w, flags)
 }
 
 /// One pixel's spectrum, whichever engine the plan chose.
@@ -62,9 +83,13 @@ impl Pixels<'_> {
     /// The paper's modes: what pixel (x, y) is (the sun's, above the horizon, or plain), and
     /// whether it is the sun's.
     pub(crate) fn basis_kind(&self, x: usize, y: usize) -> (PixelKind, bool) {
-        let PixelPlan::Basis { sun, .. } = &self.plan else {
+        let PixelPlan::Basis { sun, engine } = &self.plan else {
             return (PixelKind::Plain, false);
         };
+        if !engine.looks_at_kind() {
+            // No sun and no daylight sky: every pixel is plain, none the sun's.
+            return (PixelKind::Plain, false);
+        }
         let cell = self.cells.cell_of_pixel(self.map, x, y).unwrap_or(0);
         if sun[cell] {
             (PixelKind::Sun, true)
@@ -75,25 +100,24 @@ impl Pixels<'_> {
         }
     }
 
-    /// Writes pixel (x, y)'s spectrum into `out`: what it took, and whether it is the sun's.
-    pub(crate) fn spectrum(&self, x: usize, y: usize, out: &mut [f32]) -> (Written, bool) {
+    /// Writes pixel (x, y)'s spectrum into `out`: what it took, whether it goes negative and
+    /// whether it is the sun's.
+    pub(crate) fn spectrum(&self, x: usize, y: usize, out: &mut [f32]) -> (Written, Flags) {
         let rgb = self.map.image.get(x, y);
-        let cell = self.cells.cell_of_pixel(self.map, x, y).unwrap_or(0);
         match self.plan {
             PixelPlan::Basis { engine, .. } => {
                 let kind = self.basis_kind(x, y).0;
-                let r = engine.spectrum(rgb, kind, out);
-                let w = Written {
-                    rgb_back: r.rgb_back,
-                    took: r.took,
-                    exact: true,
-                };
-                (w, kind == PixelKind::Sun && r.took == Took::Sun)
+                basis_written(&engine.spectrum(rgb, kind, out), kind)
             }
             PixelPlan::Carriers { engine, assign } => {
+                let cell = self.cells.cell_of_pixel(self.map, x, y).unwrap_or(0);
                 let a = assign[cell];
                 let w = engine.spectrum(rgb, a, out);
-                (w, a.sun && w.took == Took::Sun)
+                let flags = Flags {
+                    negative: carriers::is_negative(out),
+                    is_sun: a.sun && w.took == Took::Sun,
+                };
+                (w, flags)
             }
         }
     }

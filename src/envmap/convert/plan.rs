@@ -8,13 +8,15 @@ use crate::envmap::convert::analyse::{light_rgb, Analysis};
 use crate::envmap::convert::carrier_plan::carrier_plan;
 use crate::envmap::convert::carriers::SunSpec;
 use crate::envmap::convert::file_plan::{plan_file, FilePlan};
+use crate::envmap::convert::measure::{self, Measured, Tally};
 use crate::envmap::convert::options::{
     ConvertOptions, Lights, Method, OutputFormat, SkySpd, SunSpd,
 };
 use crate::envmap::convert::pixel_spectra::{Engine, Model, SunSource, WhitePremise};
-use crate::envmap::convert::pixels::PixelPlan;
+use crate::envmap::convert::pixels::{PixelPlan, Pixels};
 use crate::envmap::convert::planning::{Planning, SpectraPlan, SunTable};
 use crate::envmap::convert::read::Input;
+use crate::envmap::files::Precision;
 use crate::envmap::scene::{LightKind, Scene, REFLECTOR};
 use crate::error::Result;
 use crate::fit::{self, Fit, FitInput};
@@ -57,6 +59,32 @@ pub struct Plan {
     /// reading it found.
     #[serde(skip)]
     pub input: Input,
+    /// What measuring every pixel's spectrum counted, where the half-float EV scale needed the
+    /// measure (the write then counts nothing itself).
+    #[serde(skip)]
+    pub(crate) measured: Option<Tally>,
+    /// Seconds this stage took (the half-float EV's measure of every spectrum included).
+    pub seconds: f64,
+}
+
+/// Every pixel's spectrum measured, where a spectral file in half floats needs its EV scale
+/// sized by them (None otherwise: the write measures as it goes).
+fn measure_for_ev(
+    input: &Input,
+    analysis: &Analysis,
+    s: &SpectraPlan,
+    opts: &ConvertOptions,
+) -> Option<Measured> {
+    let half = opts.format == OutputFormat::Spectral && opts.precision != Precision::Float;
+    half.then(|| {
+        let px = Pixels {
+            map: &input.map,
+            cells: &analysis.scene.cells,
+            plan: &s.pixels,
+            mode: s.fit.mode,
+        };
+        measure::measure(&px, s.grid.len())
+    })
 }
 
 /// Plans the write of `input` as analysed, to `output` (None: nothing will be written). The plan
@@ -67,13 +95,15 @@ pub(crate) fn plan(
     opts: &ConvertOptions,
     output: Option<&Path>,
 ) -> Result<Plan> {
+    let t0 = std::time::Instant::now();
     let mut notes = Vec::new();
     if analysis.white.premise == WhitePremise::Space {
         notes.extend(input.keep_out_of_gamut());
     }
     let s = plan_spectra(&input, analysis, opts, &mut notes)?;
     notes.extend(input.space.note.clone());
-    let file = plan_file(&input, analysis, &s, opts, output, &mut notes);
+    let measured = measure_for_ev(&input, analysis, &s, opts);
+    let file = plan_file(analysis, &s, opts, measured.as_ref(), output, &mut notes);
     Ok(Plan {
         method: s.method,
         lights: opts.lights,
@@ -89,6 +119,8 @@ pub(crate) fn plan(
         fit: s.fit,
         pixels: s.pixels,
         input,
+        measured: measured.map(|m| m.tally),
+        seconds: t0.elapsed().as_secs_f64(),
     })
 }
 

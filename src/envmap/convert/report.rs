@@ -5,11 +5,12 @@
 use crate::envmap::convert::analyse::Analysis;
 use crate::envmap::convert::basis_form::BasisStats;
 use crate::envmap::convert::file_plan::Output;
+use crate::envmap::convert::measure::SpectraCount;
 use crate::envmap::convert::options::{mode_name, Lights, OutputFormat, SkySpd};
 use crate::envmap::convert::plan::Plan;
 use crate::envmap::convert::read::{Sanitized, SpaceChoice};
 use crate::envmap::convert::sun_report::SunReport;
-use crate::envmap::convert::write::{SpectraCount, WriteStats};
+use crate::envmap::convert::write::WriteStats;
 use crate::envmap::files::Precision;
 use crate::envmap::layout::{EnvMap, Layout};
 use crate::envmap::roundtrip::stats::{Floor, RoundTripStats};
@@ -48,6 +49,8 @@ pub struct ConvertReport {
     pub sanitized: Sanitized,
     /// The input's RGB space, and where it comes from.
     pub space: SpaceChoice,
+    /// Why the scene was not analysed (the flags decide every light); None: it was.
+    pub scene_not_analysed: Option<String>,
     /// Every light of the scene (see [`crate::envmap::scene::Light`]).
     pub lights: Vec<Light>,
     /// The sun found, or why there is none.
@@ -106,13 +109,17 @@ pub struct ConvertReport {
     pub roundtrip_without_sun: RoundTripStats,
     /// Seconds spent reading the input.
     pub seconds_read: f64,
+    /// Seconds spent analysing the scene (its lights, the white premise, the main light).
+    pub seconds_analyse: f64,
+    /// Seconds spent planning (the half-float EV's measure of every spectrum included).
+    pub seconds_plan: f64,
     /// Seconds spent converting and writing.
     pub seconds_convert: f64,
     /// The part of `seconds_convert` spent encoding and compressing the EXR blocks.
     pub seconds_encode: f64,
     /// What `--tolerance` chose (None: the grid was given).
     pub grid_choice: Option<GridChoice>,
-    /// Input megapixels converted per second, reading included.
+    /// Input megapixels converted per second, every stage included.
     pub megapixels_per_second: f64,
 }
 
@@ -150,6 +157,7 @@ impl ConvertReport {
             below_half,
             sanitized: read.sanitized,
             space: read.space.clone(),
+            scene_not_analysed: analysis.not_analysed.clone(),
             lights: analysis.scene.lights.clone(),
             sun: SunReport::of(&analysis.scene),
             sun_spd: plan.sun_spd.clone(),
@@ -177,10 +185,13 @@ impl ConvertReport {
             roundtrip: written.roundtrip,
             roundtrip_without_sun: written.roundtrip_without_sun,
             seconds_read: read.seconds,
+            seconds_analyse: analysis.seconds,
+            seconds_plan: plan.seconds,
             seconds_convert: written.seconds,
             seconds_encode: written.seconds_encode,
             grid_choice: plan.grid_choice.clone(),
-            megapixels_per_second: megapixels / (read.seconds + written.seconds),
+            megapixels_per_second: megapixels
+                / (read.seconds + analysis.seconds + plan.seconds + written.seconds),
         }
     }
 }

@@ -2,18 +2,19 @@
 //! rows at a time, and measure what was written (round trip, which spectrum each pixel took).
 
 use crate::envmap::convert::basis_form::{self, BasisStats};
-use crate::envmap::convert::carriers::{self, Written};
+
 use crate::envmap::convert::coefficient_rows::{self, RowMut, SpectralRows};
 use crate::envmap::convert::file_plan::{FilePlan, Output, Precisions};
-use crate::envmap::convert::pixel_spectra::{Engine, Took};
-use crate::envmap::convert::pixels::{PixelPlan, Pixels};
+use crate::envmap::convert::measure::{SpectraCount, Tally};
+use crate::envmap::convert::pixel_spectra::Engine;
+use crate::envmap::convert::pixels::{basis_written, PixelPlan, Pixels};
 use crate::envmap::convert::plan::Plan;
 use crate::envmap::files::block::LineSource;
 use crate::envmap::files::{
     spectral_channel_name, ChannelSet, EnvmapAttr, Precision, SpectralLayout, SpectralWriter,
 };
 use crate::envmap::layout::Layout;
-use crate::envmap::roundtrip::stats::{Floor, RoundTripAccumulator, RoundTripStats};
+use crate::envmap::roundtrip::stats::{Floor, RoundTripStats};
 use crate::envmap::scene::Cells;
 use crate::error::{Error, Result};
 use rayon::prelude::*;
@@ -24,73 +25,6 @@ use std::time::Instant;
 /// The most bytes of f32 rows computed before they are written (one batch; the writer's blocks
 /// and their compressed form come on top, about as much again).
 const BATCH_BYTES: usize = 96 << 20;
-
-/// How many pixels got which spectrum.
-#[derive(Debug, Clone, Copy, Default, serde::Serialize)]
-pub struct SpectraCount {
-    /// The sun's SPD.
-    pub sun: usize,
-    /// CIE daylight family (sky, windows, daylight-coloured pixels as bright as them).
-    pub daylight: usize,
-    /// Carrier x smooth modulation.
-    pub smooth: usize,
-    /// Carrier x ColorChecker basis.
-    pub colorchecker: usize,
-    /// Carrier x non-negative Bernstein combination (exact): the faithful method's fallback where
-    /// the smooth modulation and the ColorChecker basis go negative. Not the paper's `nonneg`
-    /// mode, whose pixels count as `colorchecker` where exact and `nearest` where not.
-    pub nonneg_fallback: usize,
-    /// The nearest non-negative spectrum (the colour is not one its light can make).
-    pub nearest: usize,
-    /// Clipped lamp pixels given their lamp's SPD.
-    pub clipped: usize,
-    /// Pixels whose spectrum goes below zero somewhere.
-    pub negative: usize,
-}
-
-impl SpectraCount {
-    fn add(&mut self, took: Took, negative: bool) {
-        match took {
-            Took::Sun => self.sun += 1,
-            Took::Daylight => self.daylight += 1,
-            Took::Smooth => self.smooth += 1,
-            Took::Colorchecker => self.colorchecker += 1,
-            Took::Nonneg => self.nonneg_fallback += 1,
-            Took::Nearest => self.nearest += 1,
-            Took::Fixed => self.clipped += 1,
-        }
-        self.negative += negative as usize;
-    }
-    fn merge(&mut self, o: &SpectraCount) {
-        self.sun += o.sun;
-        self.daylight += o.daylight;
-        self.smooth += o.smooth;
-        self.colorchecker += o.colorchecker;
-        self.nonneg_fallback += o.nonneg_fallback;
-        self.nearest += o.nearest;
-        self.clipped += o.clipped;
-        self.negative += o.negative;
-    }
-}
-
-/// The round trip over all pixels, without the sun, and over the pixels that could not be
-/// exact (the nearest non-negative spectra, clipped lamp pixels, the paper modes' inexact ones).
-#[derive(Debug, Clone, Default)]
-struct Tally {
-    all: RoundTripAccumulator,
-    no_sun: RoundTripAccumulator,
-    inexact: RoundTripAccumulator,
-    count: SpectraCount,
-}
-
-impl Tally {
-    fn merge(&mut self, o: &Tally) {
-        self.all.merge(&o.all);
-        self.no_sun.merge(&o.no_sun);
-        self.inexact.merge(&o.inexact);
-        self.count.merge(&o.count);
-    }
-}
 
 /// What the write did.
 #[derive(Debug, Clone)]
@@ -269,7 +203,8 @@ fn stats(per_pixel: usize, bytes: u64, tally: Tally, t1: Instant, encode: f64) -
 }
 
 /// Computes the map's spectra a batch of rows at a time (whole blocks of `lines` rows, enough
-/// for the writer to compress them in parallel, within [`BATCH_BYTES`]) into `sink`.
+/// for the writer to compress them in parallel, within [`BATCH_BYTES`]) into `sink`; the tally
+/// the plan's measure counted, or else the one counted as they are written.
 fn stream_spectra(
     plan: &Plan,
     cells: &Cells,
@@ -289,15 +224,26 @@ fn stream_spectra(
         plan: &plan.pixels,
         mode: plan.fit.mode,
     };
-    let bands = plan.grid.len();
-    match &plan.pixels {
-        PixelPlan::Basis { engine, .. } => {
-            stream_planes(&px, engine, bands, sink, rows_per_block, progress)
-        }
-        PixelPlan::Carriers { .. } => {
-            stream_rows(&px, bands, sink, rows_per_block, per_pixel, progress)
-        }
-    }
+    let s = Stream {
+        px,
+        bands: plan.grid.len(),
+        rows_per_block,
+        counting: plan.measured.is_none(),
+    };
+    let counted = match &plan.pixels {
+        PixelPlan::Basis { engine, .. } => stream_planes(&s, engine, sink, progress)?,
+        PixelPlan::Carriers { .. } => stream_rows(&s, sink, per_pixel, progress)?,
+    };
+    Ok(plan.measured.clone().unwrap_or(counted))
+}
+
+/// What the streaming of rows shares: the pixels, the bands, the rows of a batch, and whether
+/// the write counts the tally (the plan's measure has not).
+struct Stream<'a> {
+    px: Pixels<'a>,
+    bands: usize,
+    rows_per_block: usize,
+    counting: bool,
 }
 
 /// Where computed rows go: the OpenEXR writer, or memory.
@@ -408,25 +354,23 @@ impl Sink for Memory {
 /// The rows written pixel-interleaved, a batch at a time (the faithful method: each pixel's
 /// carrier and modulation).
 fn stream_rows(
-    px: &Pixels,
-    bands: usize,
+    s: &Stream,
     writer: &mut dyn Sink,
-    rows_per_block: usize,
     per_pixel: usize,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Tally> {
-    let (width, height) = (px.map.image.width, px.map.image.height);
-    let mut buffer = vec![0f32; rows_per_block * width * per_pixel];
+    let (width, height) = (s.px.map.image.width, s.px.map.image.height);
+    let mut buffer = vec![0f32; s.rows_per_block * width * per_pixel];
     let mut tally = Tally::default();
     let mut y0 = 0;
     while y0 < height {
-        let rows = rows_per_block.min(height - y0);
+        let rows = s.rows_per_block.min(height - y0);
         let buf = &mut buffer[..rows * width * per_pixel];
         let batch = buf
             .par_chunks_mut(width * per_pixel)
             .enumerate()
             .fold(Tally::default, |mut t, (r, row)| {
-                write_row(px, y0 + r, row, bands, per_pixel, &mut t);
+                write_row(s, y0 + r, row, per_pixel, &mut t);
                 t
             })
             .reduce(Tally::default, |mut a, b| {
@@ -445,55 +389,30 @@ fn stream_rows(
 /// batch filled while the last is compressed: a band's scan line is one multiply-add per pixel
 /// and spectrum, computed as the writer asks for it.
 fn stream_planes(
-    px: &Pixels,
+    s: &Stream,
     engine: &Engine,
-    bands: usize,
     writer: &mut dyn Sink,
-    rows_per_block: usize,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Tally> {
-    let (width, height) = (px.map.image.width, px.map.image.height);
-    let new_batch = || SpectralRows::new(engine.spectra_table(), bands, 4, width, rows_per_block);
+    let (width, height) = (s.px.map.image.width, s.px.map.image.height);
+    let new_batch =
+        || SpectralRows::new(engine.spectra_table(), s.bands, 4, width, s.rows_per_block);
     let mut planes = [new_batch(), new_batch()];
     // Each row's tally is merged as it is done (a map's rows of luminance bins would not fit).
     let tally = std::sync::Mutex::new(Tally::default());
     let fill = |y: usize, mut row: RowMut| {
-        let mut t = Tally::default();
-        // The spectrum itself is only looked at (negative values, the round trip).
-        let mut scratch = vec![0f32; bands];
-        for x in 0..width {
-            let rgb = px.map.image.get(x, y);
-            let (kind, is_sun) = px.basis_kind(x, y);
-            let r = engine.spectrum(rgb, kind, &mut scratch);
-            row.set(x, &r.combination);
-            let extra = [rgb[0], rgb[1], rgb[2], is_sun as u8 as f32];
-            for (e, v) in extra.into_iter().enumerate() {
-                row.set_extra(e, x, v);
-            }
-            let w = Written {
-                rgb_back: r.rgb_back,
-                took: r.took,
-                exact: true,
-            };
-            measure(
-                &mut t,
-                px,
-                x,
-                y,
-                w,
-                r.negative,
-                is_sun && r.took == Took::Sun,
-            );
+        let t = plane_row(s, engine, y, &mut row);
+        if s.counting {
+            tally
+                .lock()
+                .expect("no tally is merged by a panicking thread")
+                .merge(&t);
         }
-        tally
-            .lock()
-            .expect("no tally is merged by a panicking thread")
-            .merge(&t);
     };
     coefficient_rows::stream(
         &mut planes,
         height,
-        rows_per_block,
+        s.rows_per_block,
         &fill,
         &mut |y0, rows, batch| {
             writer.lines(y0, rows, batch)?;
@@ -506,55 +425,59 @@ fn stream_planes(
         .expect("no tally is merged by a panicking thread"))
 }
 
-/// One row of the output: each pixel's values, and what it took, added to `t`.
-fn write_row(
-    px: &Pixels,
-    y: usize,
-    row: &mut [f32],
-    bands: usize,
-    per_pixel: usize,
-    t: &mut Tally,
-) {
+/// Row `y` of the coefficient planes: each pixel's combination, R, G, B and sun mask. Counted
+/// (and so computed in full) only where the plan's measure has not counted it; else each
+/// pixel's combination is decided without its spectrum.
+fn plane_row(s: &Stream, engine: &Engine, y: usize, row: &mut RowMut) -> Tally {
+    let (px, width) = (&s.px, s.px.map.image.width);
+    let mut t = Tally::default();
+    // The spectrum itself is only looked at (negative values, the round trip).
+    let mut scratch = Vec::new();
+    let omega_row = px.map.row_solid_angle(y);
+    for x in 0..width {
+        let rgb = px.map.image.get(x, y);
+        let (kind, is_sun) = px.basis_kind(x, y);
+        let decided = (!s.counting)
+            .then(|| engine.combination(rgb, kind))
+            .flatten();
+        let combination = match decided {
+            Some(c) => c,
+            None => {
+                scratch.resize(s.bands, 0.0);
+                let r = engine.spectrum(rgb, kind, &mut scratch);
+                if s.counting {
+                    let (w, flags) = basis_written(&r, kind);
+                    let omega = omega_row.unwrap_or_else(|| px.map.solid_angle(x, y));
+                    t.add(px, (x, y, omega), w, flags);
+                }
+                r.combination
+            }
+        };
+        row.set(x, &combination);
+        let extra = [rgb[0], rgb[1], rgb[2], is_sun as u8 as f32];
+        for (e, v) in extra.into_iter().enumerate() {
+            row.set_extra(e, x, v);
+        }
+    }
+    t
+}
+
+/// One row of the output: each pixel's values, and (where the write counts) what it took,
+/// added to `t`.
+fn write_row(s: &Stream, y: usize, row: &mut [f32], per_pixel: usize, t: &mut Tally) {
+    let (px, bands) = (&s.px, s.bands);
     let width = px.map.image.width;
+    let omega_row = px.map.row_solid_angle(y);
     for x in 0..width {
         let rgb = px.map.image.get(x, y);
         let out = &mut row[x * per_pixel..(x + 1) * per_pixel];
         let (spectrum, rest) = out.split_at_mut(bands);
-        let (w, is_sun) = px.spectrum(x, y, spectrum);
+        let (w, flags) = px.spectrum(x, y, spectrum);
         rest[..3].copy_from_slice(&rgb);
-        rest[3] = is_sun as u8 as f32;
-        let negative = carriers::is_negative(spectrum);
-        measure(t, px, x, y, w, negative, is_sun);
-    }
-}
-
-/// Adds pixel (x, y) to the tally: which spectrum it took, and its round trip (see
-/// [`crate::envmap::roundtrip::stats`]) over all pixels, without the sun, and if inexact.
-fn measure(
-    t: &mut Tally,
-    px: &Pixels,
-    x: usize,
-    y: usize,
-    w: Written,
-    negative: bool,
-    is_sun: bool,
-) {
-    let metric = px.metric();
-    let rgb = px.map.image.get(x, y);
-    let lum = metric.luminance(rgb);
-    let de = if lum > 0.0 {
-        metric.round_trip_error(rgb, w.rgb_back)
-    } else {
-        0.0
-    };
-    let (took, exact) = px.exactness(w, de);
-    t.count.add(took, negative);
-    let omega = px.map.solid_angle(x, y);
-    t.all.add(x, y, lum, omega, de);
-    if !is_sun {
-        t.no_sun.add(x, y, lum, omega, de);
-        if !exact {
-            t.inexact.add(x, y, lum, omega, de);
+        rest[3] = flags.is_sun as u8 as f32;
+        if s.counting {
+            let omega = omega_row.unwrap_or_else(|| px.map.solid_angle(x, y));
+            t.add(px, (x, y, omega), w, flags);
         }
     }
 }

@@ -76,6 +76,24 @@ impl EnvMap {
         self.direction_at(x, y, 0.5, 0.5)
     }
 
+    /// Whether pixel (x, y) has a direction (every pixel of a lat-long does; a cross or strip's
+    /// unused cells do not): `direction(x, y).is_some()` without computing it.
+    pub fn has_direction(&self, x: usize, y: usize) -> bool {
+        match self.layout.slots() {
+            None => x < self.image.width && y < self.image.height,
+            Some(_) => self.direction(x, y).is_some(),
+        }
+    }
+
+    /// The solid angle every pixel of row `y` has, where they all have the same (a lat-long's
+    /// row): `solid_angle(x, y)` for any x in the image. None for cube layouts.
+    pub fn row_solid_angle(&self, y: usize) -> Option<f64> {
+        match self.layout.slots() {
+            None if self.image.width > 0 => Some(self.solid_angle(0, y)),
+            _ => None,
+        }
+    }
+
     /// The exact solid angle of pixel (x, y) in steradians (0 in unused cells and outside the
     /// image); over all pixels these sum to 4π.
     pub fn solid_angle(&self, x: usize, y: usize) -> f64 {

@@ -103,7 +103,10 @@ impl Bin {
         self.solid_angle += o.solid_angle;
         self.energy += o.energy;
         self.weighted += o.weighted;
-        if empty || o.max > self.max {
+        // On a tie the pixel first in scan order: the same whichever way threads split the map.
+        let first = |at: [u32; 2]| (at[1], at[0]);
+        let tie_first = o.max == self.max && first(o.max_at) < first(self.max_at);
+        if empty || o.max > self.max || tie_first {
             self.max = o.max;
             self.max_at = o.max_at;
             self.max_luminance = o.max_luminance;

@@ -5,8 +5,9 @@ use super::cells::{weighted_quantile, Cells};
 use super::regions::{components, RegionStats};
 use nalgebra::Vector3;
 
-/// The scene's luminance levels that emitters are measured against.
-#[derive(Debug, Clone, Copy, serde::Serialize)]
+/// The scene's luminance levels that emitters are measured against (all 0 where the scene was
+/// not analysed).
+#[derive(Debug, Clone, Copy, Default, serde::Serialize)]
 pub struct Levels {
     /// The solid-angle-weighted median luminance of the map: a typical reflector.
     pub median: f64,

@@ -202,6 +202,22 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// A scene left unanalysed because the flags decide every pixel's light: the analysis grid
+    /// (each pixel's cell) and no light, level or reflector mix.
+    pub fn unanalysed(map: &EnvMap, space: &RgbSpace, model: ReflectorModel) -> Scene {
+        let cells = Cells::new(map, space, [1.0; 3]);
+        let label = vec![REFLECTOR; cells.len()];
+        Scene {
+            levels: Levels::default(),
+            lights: Vec::new(),
+            bright_reflectors: Vec::new(),
+            reflector_energy_share: 1.0,
+            reflectors: Reflectors::estimate(&cells, &label, &[], model),
+            cells,
+            label,
+        }
+    }
+
     /// The sun, if the scene has one.
     pub fn sun(&self) -> Option<&Light> {
         self.lights.iter().find(|l| l.kind == LightKind::Sun)
