@@ -14,8 +14,10 @@ use rayon::prelude::*;
 #[derive(Debug, Clone)]
 pub(crate) struct SpectralRows {
     width: usize,
-    /// spectra[k][band]
+    /// The spectra that have planes, in table order: spectra[k][band].
     spectra: Vec<Vec<f32>>,
+    /// For each spectrum of the table: its plane, or [`NO_PLANE`] (no pixel can use it).
+    plane_of: [u8; 64],
     bands: usize,
     extras: usize,
     /// Row r, spectrum k, pixel x at `r * stride + k * width + x` (see `strides`).
@@ -26,9 +28,13 @@ pub(crate) struct SpectralRows {
     used: Vec<u64>,
 }
 
+/// A table spectrum that no pixel can use has no plane.
+const NO_PLANE: u8 = u8::MAX;
+
 /// One row being filled (see [`SpectralRows::rows_mut`]).
 pub(crate) struct RowMut<'a> {
     width: usize,
+    plane_of: &'a [u8; 64],
     coefficients: &'a mut [f32],
     extra: &'a mut [f32],
     used: &'a mut u64,
@@ -38,8 +44,14 @@ impl RowMut<'_> {
     /// Pixel `x`'s spectrum.
     pub(crate) fn set(&mut self, x: usize, c: &Combination) {
         for j in 0..c.count {
-            self.coefficients[(c.first + j) * self.width + x] = c.weights[j];
-            *self.used |= 1 << (c.first + j);
+            let k = self.plane_of[c.first + j];
+            assert!(
+                k != NO_PLANE,
+                "a pixel uses spectrum {} of no plane",
+                c.first + j
+            );
+            self.coefficients[k as usize * self.width + x] = c.weights[j];
+            *self.used |= 1 << k;
         }
     }
 
@@ -50,10 +62,12 @@ impl RowMut<'_> {
 }
 
 impl SpectralRows {
-    /// Room for `rows` rows of `width` pixels: `bands` channels made of the `spectra` (each
-    /// `bands` long; none when `bands` is 0), then `extras` channels set directly.
+    /// Room for `rows` rows of `width` pixels: `bands` channels made of the table's `spectra`
+    /// (each `bands` long; none when `bands` is 0), of which only those in `live` (bit k: the
+    /// table's spectrum k) can be used and get a plane, then `extras` channels set directly.
     pub(crate) fn new(
         spectra: Vec<Vec<f32>>,
+        live: u64,
         bands: usize,
         extras: usize,
         width: usize,
@@ -61,14 +75,23 @@ impl SpectralRows {
     ) -> Self {
         let spectra = if bands == 0 { Vec::new() } else { spectra };
         assert!(spectra.len() <= 64 && spectra.iter().all(|s| s.len() == bands));
+        let mut plane_of = [NO_PLANE; 64];
+        let mut kept = Vec::new();
+        for (k, s) in spectra.into_iter().enumerate() {
+            if live & (1 << k) != 0 {
+                plane_of[k] = kept.len() as u8;
+                kept.push(s);
+            }
+        }
         SpectralRows {
             width,
             bands,
             extras,
-            coefficients: vec![0.0; rows * spectra.len().max(1) * width],
+            coefficients: vec![0.0; rows * kept.len().max(1) * width],
             extra: vec![0.0; rows * extras.max(1) * width],
             used: vec![0; rows],
-            spectra,
+            spectra: kept,
+            plane_of,
         }
     }
 
@@ -88,6 +111,7 @@ impl SpectralRows {
     ) -> impl IndexedParallelIterator<Item = RowMut<'_>> {
         let width = self.width;
         let (k, e) = self.strides();
+        let plane_of = &self.plane_of;
         self.coefficients[..rows * k]
             .par_chunks_mut(k)
             .zip(self.extra[..rows * e].par_chunks_mut(e))
@@ -97,6 +121,7 @@ impl SpectralRows {
                 *used = 0;
                 RowMut {
                     width,
+                    plane_of,
                     coefficients,
                     extra,
                     used,
@@ -183,13 +208,21 @@ mod tests {
 
     #[test]
     fn a_band_line_is_each_pixels_combination_and_extras_come_as_set() {
-        // Two spectra sets over 3 bands: pixel 0 takes set A (k 0, 1), pixel 1 set B (k 2).
-        let spectra = vec![
+        // Two spectra sets over 3 bands: pixel 0 takes set A (k 0, 1), pixel 1 set B (k 3).
+        let spectra = [
             vec![1.0, 2.0, 3.0],
             vec![0.5, 0.0, -1.0],
             vec![4.0, 5.0, 6.0],
         ];
-        let mut rows = SpectralRows::new(spectra, 3, 1, 2, 2);
+        // Spectrum 2 of the table is one no pixel uses: it gets no plane.
+        let table = vec![
+            spectra[0].clone(),
+            spectra[1].clone(),
+            vec![9.0; 3],
+            spectra[2].clone(),
+        ];
+        let mut rows = SpectralRows::new(table, 0b1011, 3, 1, 2, 2);
+        assert_eq!(rows.spectra.len(), 3);
         rows.rows_mut(2).enumerate().for_each(|(r, mut row)| {
             let k = r as f32 + 1.0;
             row.set(
@@ -203,7 +236,7 @@ mod tests {
             row.set(
                 1,
                 &Combination {
-                    first: 2,
+                    first: 3,
                     count: 1,
                     weights: [0.25, 0.0, 0.0],
                 },
@@ -231,7 +264,7 @@ mod tests {
     #[test]
     fn streaming_writes_every_row_once_in_order_from_its_own_batch() {
         let spectra = vec![vec![1.0, 10.0]];
-        let new = || SpectralRows::new(spectra.clone(), 2, 0, 3, 4);
+        let new = || SpectralRows::new(spectra.clone(), 1, 2, 0, 3, 4);
         let mut buffers = [new(), new()];
         let mut seen = Vec::new();
         let stats = stream(

@@ -628,6 +628,23 @@ impl Engine {
         table
     }
 
+    /// Which spectra of [`Engine::spectra_table`] a pixel's [`Combination`] can use (bit k:
+    /// spectrum k): the ColorChecker basis, and the daylight, smooth and sun spectra where the
+    /// engine has them.
+    pub fn live_spectra(&self) -> u64 {
+        let set = |on: bool, first: usize, count: usize| -> u64 {
+            if on {
+                ((1u64 << count) - 1) << first
+            } else {
+                0
+            }
+        };
+        set(true, TABLE_COLORCHECKER, 3)
+            | set(self.daylight.is_some(), TABLE_DAYLIGHT, 3)
+            | set(self.smooth.is_some(), TABLE_SMOOTH, 3)
+            | set(self.sun.is_some(), TABLE_SUN, 1)
+    }
+
     /// The sun's SPD at Y = 1 on the output grid, if any.
     pub fn sun_spectrum(&self) -> Option<&[f32]> {
         self.sun.as_ref().map(|(s, _)| s.as_slice())
@@ -935,6 +952,9 @@ mod tests {
                 let r = e.spectrum(rgb, kind, &mut out);
                 let c = e.combination(rgb, kind).expect("no smooth model");
                 assert_eq!(c, r.combination, "{rgb:?} {kind:?}");
+                for j in 0..c.count {
+                    assert!(e.live_spectra() & (1 << (c.first + j)) != 0, "{c:?}");
+                }
                 seen.insert(format!("{:?}", r.took));
                 for (b, &v) in out.iter().enumerate() {
                     let w: f32 =

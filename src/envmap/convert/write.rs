@@ -22,9 +22,11 @@ use rayon::slice::ChunksMut;
 use std::path::Path;
 use std::time::Instant;
 
-/// The most bytes of f32 rows computed before they are written (one batch; the writer's blocks
-/// and their compressed form come on top, about as much again).
-const BATCH_BYTES: usize = 96 << 20;
+/// The most bytes a batch of rows holds between computing and writing: the f32 rows of the
+/// pixel-interleaved write, or the two batches of coefficient planes of the planes write and
+/// their encoded samples; at least a block per thread (the writer's per-thread block buffers
+/// come on top).
+const BATCH_BYTES: usize = 32 << 20;
 
 /// What the write did.
 #[derive(Debug, Clone)]
@@ -214,9 +216,11 @@ fn stream_spectra(
 ) -> Result<Tally> {
     let map = &plan.input.map;
     let per_pixel = channel_names(plan).len();
-    let (width, height) = (map.image.width, map.image.height);
-    let block_bytes = lines * width * per_pixel * std::mem::size_of::<f32>();
-    let blocks = (BATCH_BYTES / block_bytes.max(1)).clamp(1, height.div_ceil(lines));
+    let height = map.image.height;
+    let rows = BATCH_BYTES / row_bytes(plan, per_pixel).max(1);
+    let blocks = (rows / lines)
+        .max(rayon::current_num_threads())
+        .clamp(1, height.div_ceil(lines));
     let rows_per_block = (blocks * lines).max(16).min(height);
     let px = Pixels {
         map,
@@ -244,6 +248,25 @@ struct Stream<'a> {
     bands: usize,
     rows_per_block: usize,
     counting: bool,
+}
+
+/// The bytes a row of the batch holds (see [`BATCH_BYTES`]): `per_pixel` f32 values a pixel, or
+/// two batches of the engine's coefficient planes and extra channels as f32 and the row's
+/// encoded samples (uncompressed at worst).
+fn row_bytes(plan: &Plan, per_pixel: usize) -> usize {
+    let width = plan.input.map.image.width;
+    let f32_bytes = std::mem::size_of::<f32>();
+    match &plan.pixels {
+        PixelPlan::Carriers { .. } => width * per_pixel * f32_bytes,
+        PixelPlan::Basis { engine, .. } => {
+            let planes = engine.live_spectra().count_ones() as usize + 4;
+            let sample = match &plan.file.output {
+                Output::Spectral { precision } if precision.precision == Precision::Half => 2,
+                _ => 4,
+            };
+            width * (2 * planes * f32_bytes + per_pixel * sample)
+        }
+    }
 }
 
 /// Where computed rows go: the OpenEXR writer, or memory.
@@ -395,8 +418,16 @@ fn stream_planes(
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Tally> {
     let (width, height) = (s.px.map.image.width, s.px.map.image.height);
-    let new_batch =
-        || SpectralRows::new(engine.spectra_table(), s.bands, 4, width, s.rows_per_block);
+    let new_batch = || {
+        SpectralRows::new(
+            engine.spectra_table(),
+            engine.live_spectra(),
+            s.bands,
+            4,
+            width,
+            s.rows_per_block,
+        )
+    };
     let mut planes = [new_batch(), new_batch()];
     // Each row's tally is merged as it is done (a map's rows of luminance bins would not fit).
     let tally = std::sync::Mutex::new(Tally::default());

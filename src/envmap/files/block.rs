@@ -173,7 +173,9 @@ impl BlockEncoder {
         let compressed_pixels_le = match f.compression {
             // Handed over whole: the next block allocates its own.
             Compression::None => std::mem::take(&mut self.bytes),
-            Compression::Zip | Compression::Zips if f.half => self.zip.encode_split(&self.bytes),
+            Compression::Zip | Compression::Zips if f.half => {
+                self.zip.encode_split_in_place(&mut self.bytes)
+            }
             Compression::Zip | Compression::Zips => self.zip.encode(&self.bytes),
             _ => return self.compress_with_exr(f, index, block_y, lines),
         };

@@ -14,6 +14,7 @@ use std::fs::File;
 use std::io::BufWriter;
 use std::path::{Path, PathBuf};
 use std::sync::mpsc::{sync_channel, SyncSender};
+use std::sync::Mutex;
 use std::thread::JoinHandle;
 
 /// Compressed blocks queued for the file-writing thread.
@@ -55,6 +56,38 @@ pub struct SpectralWriter {
     worker: Option<JoinHandle<exr::error::Result<()>>>,
     finished: bool,
     encode_seconds: f64,
+    /// Block encoders kept between calls (their block-sized buffers and libdeflate's tables are
+    /// allocated once, not per batch).
+    encoders: Mutex<Vec<BlockEncoder>>,
+}
+
+/// An encoder taken from the writer's pool for one thread's share of a batch, given back when
+/// dropped.
+struct Pooled<'a> {
+    encoder: Option<BlockEncoder>,
+    pool: &'a Mutex<Vec<BlockEncoder>>,
+}
+
+impl<'a> Pooled<'a> {
+    fn take(pool: &'a Mutex<Vec<BlockEncoder>>, zip_level: u8) -> Pooled<'a> {
+        let kept = pool.lock().ok().and_then(|mut p| p.pop());
+        Pooled {
+            encoder: Some(kept.unwrap_or_else(|| BlockEncoder::new(zip_level))),
+            pool,
+        }
+    }
+
+    fn get(&mut self) -> &mut BlockEncoder {
+        self.encoder.as_mut().expect("held until dropped")
+    }
+}
+
+impl Drop for Pooled<'_> {
+    fn drop(&mut self) {
+        if let (Some(e), Ok(mut p)) = (self.encoder.take(), self.pool.lock()) {
+            p.push(e);
+        }
+    }
 }
 
 impl SpectralWriter {
@@ -87,6 +120,7 @@ impl SpectralWriter {
             worker: Some(output.worker),
             finished: false,
             encode_seconds: 0.0,
+            encoders: Mutex::new(Vec::new()),
         })
     }
 
@@ -190,9 +224,10 @@ impl SpectralWriter {
         let chunks: Vec<Result<Encoded>> = jobs
             .par_iter()
             .map_init(
-                || BlockEncoder::new(this.zip_level),
+                || Pooled::take(&this.encoders, this.zip_level),
                 |enc, &(block_y, src, row0)| {
-                    enc.encode(&format, src, row0, block_y, this.block_lines(block_y))
+                    enc.get()
+                        .encode(&format, src, row0, block_y, this.block_lines(block_y))
                 },
             )
             .collect();

@@ -11,12 +11,11 @@ pub const DEFAULT_LEVEL: u8 = 4;
 /// The highest level libdeflate accepts.
 pub const MAX_LEVEL: u8 = 12;
 
-/// A reusable compressor (one per thread: libdeflate keeps large match tables; the split,
-/// predictor and output buffers are kept between blocks too).
+/// A reusable compressor (one per thread: libdeflate keeps large match tables; the split and
+/// output buffers are kept between blocks too, and the predictor works in place).
 pub struct ZipEncoder {
     compressor: libdeflater::Compressor,
     split: Vec<u8>,
-    delta: Vec<u8>,
     out: Vec<u8>,
 }
 
@@ -28,7 +27,6 @@ impl ZipEncoder {
         ZipEncoder {
             compressor: libdeflater::Compressor::new(level),
             split: Vec::new(),
-            delta: Vec::new(),
             out: Vec::new(),
         }
     }
@@ -39,7 +37,7 @@ impl ZipEncoder {
     pub fn encode(&mut self, raw_le: &[u8]) -> Vec<u8> {
         let mut split = std::mem::take(&mut self.split);
         split_bytes(raw_le, &mut split);
-        let chunk = self.encode_split(&split);
+        let chunk = self.encode_split_in_place(&mut split);
         self.split = split;
         chunk
     }
@@ -48,26 +46,55 @@ impl ZipEncoder {
     /// block (the low bytes of half samples), then those at odd offsets, as OpenEXR's predictor
     /// first arranges them. A writer that produces samples can lay them out so directly.
     pub fn encode_split(&mut self, split: &[u8]) -> Vec<u8> {
+        let mut scratch = std::mem::take(&mut self.split);
+        scratch.clear();
+        scratch.extend_from_slice(split);
+        let chunk = self.encode_split_in_place(&mut scratch);
+        self.split = scratch;
+        chunk
+    }
+
+    /// [`ZipEncoder::encode_split`] with the split block as scratch: the predictor replaces its
+    /// bytes (so no second block-sized buffer is needed); what they hold after is unspecified.
+    pub fn encode_split_in_place(&mut self, split: &mut [u8]) -> Vec<u8> {
         let n = split.len();
         if n == 0 {
             return Vec::new();
         }
-        // Each byte replaced by its difference to the previous one, plus 128 (zipped slices:
-        // the compiler vectorises it).
-        self.delta.resize(n, 0);
-        self.delta[0] = split[0];
-        for ((d, &cur), &prev) in self.delta[1..]
-            .iter_mut()
-            .zip(&split[1..])
-            .zip(&split[..n - 1])
-        {
-            *d = cur.wrapping_sub(prev).wrapping_add(128);
-        }
+        predict(split);
         self.out.resize(self.compressor.zlib_compress_bound(n), 0);
-        match self.compressor.zlib_compress(&self.delta, &mut self.out) {
+        match self.compressor.zlib_compress(split, &mut self.out) {
             Ok(size) if size < n => self.out[..size].to_vec(),
-            _ => unsplit_bytes(split),
+            _ => {
+                unpredict(split);
+                unsplit_bytes(split)
+            }
         }
+    }
+}
+
+/// OpenEXR's predictor, in place: each byte replaced by its difference to the previous one, plus
+/// 128. A piece at a time from a copy of it (zipped slices: the compiler vectorises them), the
+/// last byte of the piece before carried over.
+fn predict(bytes: &mut [u8]) {
+    const PIECE: usize = 4096;
+    let mut before = [0u8; PIECE];
+    let mut prev = bytes[0];
+    for piece in bytes[1..].chunks_mut(PIECE) {
+        let n = piece.len();
+        before[0] = prev;
+        before[1..n].copy_from_slice(&piece[..n - 1]);
+        prev = piece[n - 1];
+        for (d, &b) in piece.iter_mut().zip(&before[..n]) {
+            *d = d.wrapping_sub(b).wrapping_add(128);
+        }
+    }
+}
+
+/// The bytes back from [`predict`]'s differences.
+fn unpredict(bytes: &mut [u8]) {
+    for i in 1..bytes.len() {
+        bytes[i] = bytes[i].wrapping_add(bytes[i - 1]).wrapping_sub(128);
     }
 }
 
@@ -146,6 +173,24 @@ mod tests {
                 }
             })
             .collect()
+    }
+
+    #[test]
+    fn the_predictor_in_place_is_the_difference_to_the_byte_before_and_goes_back() {
+        // Longer than a piece, so that pieces carry their last byte over.
+        let raw: Vec<u8> = (0..10_000u32).map(|i| (i * i % 251) as u8).collect();
+        let mut p = raw.clone();
+        predict(&mut p);
+        assert_eq!(p[0], raw[0]);
+        for i in 1..raw.len() {
+            assert_eq!(
+                p[i],
+                raw[i].wrapping_sub(raw[i - 1]).wrapping_add(128),
+                "{i}"
+            );
+        }
+        unpredict(&mut p);
+        assert_eq!(p, raw);
     }
 
     #[test]

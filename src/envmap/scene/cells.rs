@@ -42,12 +42,11 @@ impl Cells {
     /// The cells of `map`, each pixel multiplied by `balance` (the white premise: the main
     /// light's RGB when the map is white-balanced to it, else 1) to make it D65-referenced.
     pub fn new(map: &EnvMap, space: &RgbSpace, balance: [f64; 3]) -> Cells {
-        let identity = map.layout == Layout::LatLong && map.image.width <= MAX_ANALYSIS_WIDTH;
+        let (identity, height) = grid_of(map);
         let resampled;
         let src = if identity {
             map
         } else {
-            let height = (map.face_size() * 2).clamp(2, MAX_ANALYSIS_WIDTH / 2);
             resampled = map.resample(Layout::LatLong, height);
             &resampled
         };
@@ -71,6 +70,28 @@ impl Cells {
             })
             .collect();
         let (w, h) = (src.image.width, src.image.height);
+        Cells {
+            rgb,
+            y,
+            ..Cells::grid(w, h, to_xyz, identity, balance)
+        }
+    }
+
+    /// The cells of `map` without their colours (`rgb` and `y` empty): where each pixel falls,
+    /// each cell's direction and solid angle. A scene left unanalysed needs no more, and the map
+    /// is not resampled for it.
+    pub fn geometry(map: &EnvMap, space: &RgbSpace) -> Cells {
+        let (identity, height) = grid_of(map);
+        let (w, h) = if identity {
+            (map.image.width, map.image.height)
+        } else {
+            Layout::LatLong.dimensions(height)
+        };
+        Cells::grid(w, h, space.to_xyz_matrix(), identity, [1.0; 3])
+    }
+
+    /// A `w` x `h` lat-long grid of cells holding no colours yet.
+    fn grid(w: usize, h: usize, to_xyz: Matrix3<f64>, identity: bool, balance: [f64; 3]) -> Cells {
         let rows = (0..h)
             .map(|y| {
                 let t0 = PI * y as f64 / h as f64;
@@ -92,8 +113,8 @@ impl Cells {
         Cells {
             width: w,
             height: h,
-            rgb,
-            y,
+            rgb: Vec::new(),
+            y: Vec::new(),
             to_xyz,
             identity,
             balance,
@@ -104,12 +125,12 @@ impl Cells {
 
     /// Number of cells (width x height).
     pub fn len(&self) -> usize {
-        self.rgb.len()
+        self.width * self.height
     }
 
     /// Whether there are no cells.
     pub fn is_empty(&self) -> bool {
-        self.rgb.is_empty()
+        self.len() == 0
     }
 
     /// The solid angle of a cell (the same for every cell of a row).
@@ -180,6 +201,14 @@ impl Cells {
         })
         .filter(move |&j| j != i)
     }
+}
+
+/// Whether a map's own pixels are its cells (a lat-long at most [`MAX_ANALYSIS_WIDTH`] wide),
+/// and the height of the lat-long it is otherwise resampled to.
+fn grid_of(map: &EnvMap) -> (bool, usize) {
+    let identity = map.layout == Layout::LatLong && map.image.width <= MAX_ANALYSIS_WIDTH;
+    let height = (map.face_size() * 2).clamp(2, MAX_ANALYSIS_WIDTH / 2);
+    (identity, height)
 }
 
 /// The solid-angle-weighted quantile `q` (0..1) of `values` over the cells.

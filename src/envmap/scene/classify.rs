@@ -840,7 +840,7 @@ fn sun_of(
     settings: &SceneSettings,
 ) -> std::result::Result<usize, String> {
     let Some(s) = &settings.sun else {
-        return Err("sun detection is off (--sun off)".into());
+        return Err(super::sun::SUN_OFF.into());
     };
     let Some(c) = candidates.first() else {
         return Err("nothing in the map stands out".into());

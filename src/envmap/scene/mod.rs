@@ -205,12 +205,12 @@ impl Scene {
     /// A scene left unanalysed because the flags decide every pixel's light: the analysis grid
     /// (each pixel's cell) and no light, level or reflector mix.
     pub fn unanalysed(map: &EnvMap, space: &RgbSpace, model: ReflectorModel) -> Scene {
-        let cells = Cells::new(map, space, [1.0; 3]);
+        let cells = Cells::geometry(map, space);
         let label = vec![REFLECTOR; cells.len()];
         Scene {
             levels: Levels::default(),
             lights: Vec::new(),
-            bright_reflectors: Vec::new(),
+            bright_reflectors: vec![format!("no sun: {}", sun::SUN_OFF)],
             reflector_energy_share: 1.0,
             reflectors: Reflectors::estimate(&cells, &label, &[], model),
             cells,

@@ -11,6 +11,9 @@
 use crate::colorimetry::{cct, Cct, RgbSpace};
 use crate::envmap::layout::EnvMap;
 
+/// Why a scene has no sun when none was looked for.
+pub const SUN_OFF: &str = "sun detection is off (--sun off)";
+
 /// Thresholds of the sun test.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct SunSettings {
