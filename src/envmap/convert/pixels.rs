@@ -15,7 +15,7 @@ pub enum PixelPlan {
     Basis {
         /// The fit's per-pixel engine.
         engine: Box<Engine>,
-        /// Per analysis cell, whether it is the sun's.
+        /// Per analysis cell, whether it is the sun's (empty: no cell is).
         sun: Vec<bool>,
     },
     /// The faithful method: carriers, and per analysis cell what it is.
@@ -91,7 +91,7 @@ impl Pixels<'_> {
             return (PixelKind::Plain, false);
         }
         let cell = self.cells.cell_of_pixel(self.map, x, y).unwrap_or(0);
-        if sun[cell] {
+        if sun.get(cell).copied().unwrap_or(false) {
             (PixelKind::Sun, true)
         } else if self.map.direction(x, y).is_some_and(|d| d[1] > 0.0) {
             (PixelKind::Sky, false)

@@ -191,11 +191,15 @@ fn basis_plan(
 ) -> Result<(PixelPlan, Vec<String>, usize)> {
     let scene = &p.analysis.scene;
     let engine = basis_engine(p, fit, notes)?;
-    let sun_cells = scene
-        .label
-        .iter()
-        .map(|&l| l != REFLECTOR && scene.lights[l as usize].kind == LightKind::Sun)
-        .collect();
+    // None is the sun's where the scene has none (nor a cell to keep).
+    let sun_cells = match scene.sun() {
+        Some(_) => scene
+            .label
+            .iter()
+            .map(|&l| l != REFLECTOR && scene.lights[l as usize].kind == LightKind::Sun)
+            .collect(),
+        None => Vec::new(),
+    };
     let pixels = PixelPlan::Basis {
         engine: Box::new(engine),
         sun: sun_cells,

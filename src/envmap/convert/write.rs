@@ -259,7 +259,8 @@ fn row_bytes(plan: &Plan, per_pixel: usize) -> usize {
     match &plan.pixels {
         PixelPlan::Carriers { .. } => width * per_pixel * f32_bytes,
         PixelPlan::Basis { engine, .. } => {
-            let planes = engine.live_spectra().count_ones() as usize + 4;
+            // The coefficients and the sun mask (R, G, B are read from the map).
+            let planes = engine.live_spectra().count_ones() as usize + 1;
             let sample = match &plan.file.output {
                 Output::Spectral { precision } if precision.precision == Precision::Half => 2,
                 _ => 4,
@@ -423,7 +424,7 @@ fn stream_planes(
             engine.spectra_table(),
             engine.live_spectra(),
             s.bands,
-            4,
+            1,
             width,
             s.rows_per_block,
         )
@@ -446,7 +447,13 @@ fn stream_planes(
         s.rows_per_block,
         &fill,
         &mut |y0, rows, batch| {
-            writer.lines(y0, rows, batch)?;
+            let source = WithRgb {
+                planes: batch,
+                image: &s.px.map.image,
+                y0,
+                bands: s.bands,
+            };
+            writer.lines(y0, rows, &source)?;
             progress(y0 + rows, height);
             Ok(())
         },
@@ -456,7 +463,34 @@ fn stream_planes(
         .expect("no tally is merged by a panicking thread"))
 }
 
-/// Row `y` of the coefficient planes: each pixel's combination, R, G, B and sun mask. Counted
+/// A batch of coefficient planes with the sun mask as their one extra channel, and R, G, B read
+/// from the map itself: the file's channels (bands, R, G, B, sun) without a copy of the map's
+/// values in the batch.
+struct WithRgb<'a> {
+    planes: &'a SpectralRows,
+    image: &'a crate::envmap::RgbImage,
+    /// The image row of the batch's first row.
+    y0: usize,
+    bands: usize,
+}
+
+impl LineSource for WithRgb<'_> {
+    fn line(&self, channel: usize, row: usize, out: &mut [f32]) {
+        match channel.checked_sub(self.bands) {
+            Some(c @ 0..=2) => {
+                let w = self.image.width;
+                let start = (self.y0 + row) * w;
+                for (o, p) in out.iter_mut().zip(&self.image.pixels[start..start + w]) {
+                    *o = p[c];
+                }
+            }
+            Some(_) => self.planes.line(self.bands, row, out),
+            None => self.planes.line(channel, row, out),
+        }
+    }
+}
+
+/// Row `y` of the coefficient planes: each pixel's combination and sun mask. Counted
 /// (and so computed in full) only where the plan's measure has not counted it; else each
 /// pixel's combination is decided without its spectrum.
 fn plane_row(s: &Stream, engine: &Engine, y: usize, row: &mut RowMut) -> Tally {
@@ -485,10 +519,7 @@ fn plane_row(s: &Stream, engine: &Engine, y: usize, row: &mut RowMut) -> Tally {
             }
         };
         row.set(x, &combination);
-        let extra = [rgb[0], rgb[1], rgb[2], is_sun as u8 as f32];
-        for (e, v) in extra.into_iter().enumerate() {
-            row.set_extra(e, x, v);
-        }
+        row.set_extra(0, x, is_sun as u8 as f32);
     }
     t
 }
