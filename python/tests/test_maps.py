@@ -10,7 +10,8 @@ import colour
 import specmap
 
 SHAPE = colour.SpectralShape(380, 780, 5)
-TIMING = ("seconds_read", "seconds_convert", "seconds_encode", "megapixels_per_second")
+TIMING = ("seconds_read", "seconds_analyse", "seconds_plan", "seconds_convert", "seconds_encode",
+          "megapixels_per_second")
 
 
 def read_openexr(path):

@@ -26,7 +26,9 @@ pub struct Analysis {
     pub white: WhiteChoice,
     /// Why the scene was not analysed (the flags decide every pixel's light); None: it was.
     pub not_analysed: Option<String>,
-    /// Seconds this stage took.
+    /// Seconds this stage took (in a conversion's report, not in `inspect`'s, which stays the
+    /// same from run to run).
+    #[serde(skip)]
     pub seconds: f64,
 }
 

@@ -63,7 +63,9 @@ pub struct Plan {
     /// measure (the write then counts nothing itself).
     #[serde(skip)]
     pub(crate) measured: Option<Tally>,
-    /// Seconds this stage took (the half-float EV's measure of every spectrum included).
+    /// Seconds this stage took (the half-float EV's measure of every spectrum included; in a
+    /// conversion's report, not in `inspect`'s, which stays the same from run to run).
+    #[serde(skip)]
     pub seconds: f64,
 }
 
