@@ -2,7 +2,6 @@
 //! rows at a time, and measure what was written (round trip, which spectrum each pixel took).
 
 use crate::envmap::convert::basis_form::{self, BasisStats};
-
 use crate::envmap::convert::coefficient_rows::{self, RowMut, SpectralRows};
 use crate::envmap::convert::file_plan::{FilePlan, Output, Precisions};
 use crate::envmap::convert::measure::{SpectraCount, Tally};
