@@ -5,22 +5,13 @@
 
 use serde_json::Value;
 use std::path::Path;
-use std::process::Command;
 
+mod common;
+
+/// `specmap inspect PATH --json` of a file under the project's root.
 fn inspect(path: &str) -> Value {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let out = Command::new(env!("CARGO_BIN_EXE_specmap"))
-        .arg("inspect")
-        .arg(root.join(path))
-        .arg("--json")
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).unwrap()
+    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join(path);
+    common::specmap_json(&["inspect", &file.display().to_string()])
 }
 
 fn lights<'a>(j: &'a Value, kind: &str) -> Vec<&'a Value> {

@@ -32,18 +32,20 @@ pub struct Analysis {
     pub seconds: f64,
 }
 
-/// Why a write needs no scene analysis: one named light carries every pixel (the paper's modes,
-/// or `--lights one`) and there is no sun to find. None: the write needs the analysis.
-pub(crate) fn decided_by_flags(opts: &ConvertOptions) -> Option<String> {
+/// Where a write needs no scene analysis, the light that carries every pixel and why: one
+/// named light does (the paper's modes, or `--lights one`) and there is no sun to find. None:
+/// the write needs the analysis.
+pub(crate) fn decided_by_flags(opts: &ConvertOptions) -> Option<(&str, String)> {
     let LightSpec::Named(name) = &opts.light else {
         return None;
     };
     let one = opts.method == Method::Basis || opts.lights == Lights::One;
     (one && opts.sun.is_none()).then(|| {
-        format!(
+        let why = format!(
             "not analysed: --light {name} carries every pixel and --sun off leaves no sun to \
              find (inspect analyses it)"
-        )
+        );
+        (name.as_str(), why)
     })
 }
 
@@ -51,15 +53,12 @@ pub(crate) fn decided_by_flags(opts: &ConvertOptions) -> Option<String> {
 /// ([`decided_by_flags`]) only the white premise, over a scene left unanalysed.
 pub(crate) fn analyse_for_write(input: &Input, opts: &ConvertOptions) -> Result<Analysis> {
     match decided_by_flags(opts) {
-        Some(why) => {
+        Some((light, why)) => {
             let t0 = std::time::Instant::now();
-            let LightSpec::Named(light) = &opts.light else {
-                unreachable!("decided_by_flags names the light")
-            };
             let scene = Scene::unanalysed(&input.map, &input.space.space, opts.reflectors);
             Ok(Analysis {
                 scene,
-                light: light.clone(),
+                light: light.to_string(),
                 light_choice: None,
                 white: white_premise(input, opts, light, true)?,
                 not_analysed: Some(why),

@@ -144,13 +144,12 @@ pub struct Precisions {
 /// scale that would flush pixels that half holds unscaled makes the file float instead (nothing
 /// is lost silently).
 fn spectral_precision(measured: Option<&Measured>, asked: Precision) -> Precisions {
-    let Some(Measured { peak, bins, .. }) = measured.filter(|_| asked != Precision::Float) else {
+    let Some(m) = measured.filter(|_| asked != Precision::Float) else {
         return Precisions::float();
     };
-    let peak = *peak;
+    let peak = m.peak;
     // Half's smallest subnormal is 2^-24: values below 2^-25 round to 0.
-    let flushed =
-        |ev: i32| -> usize { bins[..(ev - 25 + 150).clamp(0, 300) as usize].iter().sum() };
+    let flushed = |ev: i32| m.pixels_below(ev - 25);
     let below_half = flushed(0);
     let ev = (peak as f64 > HALF_MAX as f64).then(|| (peak as f64 / HALF_MAX as f64).log2().ceil());
     match ev {

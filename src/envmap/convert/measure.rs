@@ -11,7 +11,14 @@ use rayon::prelude::*;
 use std::sync::Mutex;
 
 /// Binary exponents of a pixel's largest value are binned from 2^-150 to 2^149.
-pub(crate) const PEAK_BINS: usize = 300;
+const PEAK_BINS: usize = 300;
+/// The exponent of the first bin is -PEAK_OFFSET.
+const PEAK_OFFSET: i32 = 150;
+
+/// The bin of a pixel's largest value `p` (> 0 and finite).
+fn peak_bin(p: f32) -> usize {
+    (p.log2().floor() as i32 + PEAK_OFFSET).clamp(0, PEAK_BINS as i32 - 1) as usize
+}
 
 /// How many pixels got which spectrum.
 #[derive(Debug, Clone, Copy, Default, serde::Serialize)]
@@ -111,7 +118,15 @@ pub(crate) struct Measured {
     /// The largest magnitude of any value written (bands and R, G, B).
     pub peak: f32,
     /// Per binary exponent (from 2^-150): how many pixels have their largest magnitude there.
-    pub bins: [usize; PEAK_BINS],
+    bins: [usize; PEAK_BINS],
+}
+
+impl Measured {
+    /// How many pixels have their largest magnitude below 2^`exponent` (and above 0).
+    pub(crate) fn pixels_below(&self, exponent: i32) -> usize {
+        let end = (exponent + PEAK_OFFSET).clamp(0, PEAK_BINS as i32) as usize;
+        self.bins[..end].iter().sum()
+    }
 }
 
 /// Computes and measures every pixel's spectrum (`bands` values), rows in parallel.
@@ -139,7 +154,7 @@ pub(crate) fn measure(px: &Pixels, bands: usize) -> Measured {
                 let p = out.iter().chain(&rgb).fold(0f32, |m, v| m.max(v.abs()));
                 peak = peak.max(p);
                 if p > 0.0 && p.is_finite() {
-                    bins[(p.log2().floor() as i32 + 150).clamp(0, 299) as usize] += 1;
+                    bins[peak_bin(p)] += 1;
                 }
             }
             tally

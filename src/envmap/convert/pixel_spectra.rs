@@ -276,6 +276,21 @@ enum Chosen {
     Colorchecker(Vector3<f64>),
 }
 
+impl Chosen {
+    /// The spectrum as a combination of [`Engine::spectra_table`].
+    fn combination(&self) -> Combination {
+        match self {
+            Chosen::Sun { scale, .. } => Combination {
+                first: TABLE_SUN,
+                count: 1,
+                weights: [*scale, 0.0, 0.0],
+            },
+            Chosen::Daylight(a) => Combination::of(TABLE_DAYLIGHT, a),
+            Chosen::Colorchecker(a) => Combination::of(TABLE_COLORCHECKER, a),
+        }
+    }
+}
+
 /// What one pixel became.
 #[derive(Debug, Clone, Copy)]
 pub struct PixelResult {
@@ -734,15 +749,7 @@ impl Engine {
     /// it: what [`Engine::spectrum`] returns as `combination`. None where the smooth model is in
     /// use, which chooses by looking at the spectrum.
     pub fn combination(&self, rgb: [f32; 3], kind: PixelKind) -> Option<Combination> {
-        self.decide(rgb, kind).map(|c| match c {
-            Chosen::Sun { scale, .. } => Combination {
-                first: TABLE_SUN,
-                count: 1,
-                weights: [scale, 0.0, 0.0],
-            },
-            Chosen::Daylight(a) => Combination::of(TABLE_DAYLIGHT, &a),
-            Chosen::Colorchecker(a) => Combination::of(TABLE_COLORCHECKER, &a),
-        })
+        self.decide(rgb, kind).map(|c| c.combination())
     }
 
     /// The spectrum a pixel takes where no choice needs the spectrum itself: the sun's SPD for
@@ -793,11 +800,7 @@ impl Engine {
                     luminance,
                     negative: sun.iter().any(|&v| v < 0.0),
                     took: Took::Sun,
-                    combination: Combination {
-                        first: TABLE_SUN,
-                        count: 1,
-                        weights: [scale, 0.0, 0.0],
-                    },
+                    combination: chosen.combination(),
                 }
             }
             Chosen::Daylight(a) => {
@@ -808,7 +811,7 @@ impl Engine {
                     luminance: d.luminance(&a),
                     negative,
                     took: Took::Daylight,
-                    combination: Combination::of(TABLE_DAYLIGHT, &a),
+                    combination: chosen.combination(),
                 }
             }
             Chosen::Colorchecker(mcc) => self.colorchecker_result(mcc, out),
