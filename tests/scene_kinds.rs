@@ -1,4 +1,4 @@
-//! What `specmap inspect --json` names in studios, rooms, dusk and night (issue 41): four real
+//! What `specmap inspect --json` names in studios, rooms, dusk and night (issue 41): five real
 //! CC0 photographs (tests/data/real, README there) and the truth scenes of
 //! tools/truth_studio.py. Each decision is read from the JSON (`kind`, `solid_angle_sr`,
 //! `energy_share`, `reason`, the lamp's `family`), as a user's script would.
@@ -75,6 +75,39 @@ fn a_real_room_keeps_its_walls_out_of_the_sky() {
     assert!(lights(&j, "lamp").len() >= 5, "{text}");
 }
 
+/// A living room with a glazed door and wall sconces: the daylight is the door's glass, a window
+/// of about 0.17 sr in one direction, not the sunlit floor, the walls or the ceiling; no sky, no
+/// sun.
+#[test]
+fn a_real_living_room_has_its_window_and_no_sky() {
+    let j = inspect("tests/data/real/apartment.exr");
+    let text = j.to_string();
+    assert!(lights(&j, "sky").is_empty(), "{text}");
+    assert!(lights(&j, "sun").is_empty(), "{text}");
+    let windows = lights(&j, "window");
+    assert!(!windows.is_empty(), "{text}");
+    assert!((0.05..0.4).contains(&sr(&windows)), "{text}");
+    // One opening (the door spans about 55 degrees): every window within 60 degrees of the
+    // brightest one's direction.
+    let dir = |l: &Value| -> Vec<f64> {
+        l["direction"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect()
+    };
+    let brightest = windows
+        .iter()
+        .max_by(|a, b| share(&[a]).total_cmp(&share(&[b])))
+        .unwrap();
+    let main = dir(brightest);
+    for w in &windows {
+        let cos: f64 = dir(w).iter().zip(&main).map(|(a, b)| a * b).sum();
+        assert!(cos > 60f64.to_radians().cos(), "{w}\n{text}");
+    }
+}
+
 /// Dawn over hills and a night field: the sky, glow and all, is the sky.
 #[test]
 fn dusk_and_night_keep_their_bright_sky_in_the_sky() {
@@ -131,7 +164,8 @@ fn the_truth_room_has_its_window_and_its_lamps() {
 }
 
 /// The dusk street: the twilight sky is the sky; the sodium lamps are sodium (a coated lamp's
-/// white is a black body's) and the LED lamps LEDs, not patches of sky.
+/// white is a black body's), given the mix of sodium tables of their white, and the LED lamps
+/// LEDs, not patches of sky.
 #[test]
 fn the_truth_dusk_street_names_sodium_and_led_lamps_under_its_sky() {
     let j = inspect("tests/data/truth/street_dusk.rgb.exr");
@@ -140,6 +174,18 @@ fn the_truth_dusk_street_names_sodium_and_led_lamps_under_its_sky() {
     let lamps = lights(&j, "lamp");
     let count = |f: &str| lamps.iter().filter(|l| family(l) == f).count();
     assert!(count("high-pressure-sodium") >= 4, "{text}");
+    // The coated lamps' white (2236 K) lies between the standard lamp's and HP2's: each sodium
+    // lamp is given the mix of the two with its white.
+    for l in lamps.iter().filter(|l| family(l) == "high-pressure-sodium") {
+        let mix = &l["lamp"]["mix"];
+        assert_eq!(
+            (mix["a"].as_str(), mix["b"].as_str()),
+            (Some("hps"), Some("HP2")),
+            "{l}"
+        );
+        let share = mix["share_b"].as_f64().unwrap();
+        assert!((0.3..0.55).contains(&share), "{l}");
+    }
     assert!(count("led") >= 1, "{text}");
     assert!(lights(&j, "sun").is_empty(), "{text}");
 }

@@ -1,7 +1,9 @@
 #!/usr/bin/env python3
 """How much a wrong lamp costs: the 24 ColorChecker patches (Ohta) under one lamp against under
 another, each adapted from its own white to D65 by CAT02 (as `specmap rendition` does), mean
-CIEDE2000, all with colour-science. The ranks of src/envmap/scene/families.rs come from this.
+CIEDE2000, all with colour-science. The ranks of src/envmap/scene/families.rs come from this,
+and so does its sodium series: each measured sodium lamp against the mix of `hps` and CIE HP2
+(each at luminance 1) whose white is nearest its own, found here by search over the share.
 
     .venv/bin/python tools/lamp_rendition.py
 """
@@ -63,6 +65,36 @@ def main():
             de = [colour.delta_E(lab, r, method="CIE 2000").mean() for r in refs]
             print(f"| {m} | " + " | ".join(f"{v:.2f}" for v in de) + " |")
         print()
+    sodium_mixes()
+
+
+def uv_of(sd):
+    return colour.xy_to_UCS_uv(colour.XYZ_to_xy(colour.sd_to_XYZ(sd, CMFS)))
+
+
+def at_unit_luminance(sd):
+    return sd.values / colour.sd_to_XYZ(sd, CMFS)[1]
+
+
+def sodium_mixes():
+    a, b = table("light", "hps"), table("illuminant", "HP2")
+    ua, ub = at_unit_luminance(a), at_unit_luminance(b)
+    print("## sodium series: measured lamp against the mix of hps and HP2 of its white")
+    print("| lamp | CCT (K) | HP2's share of the mix | mix | hps | HP2 |")
+    print("|---|---:|---:|---:|---:|---:|")
+    for m in GROUPS["sodium"][0]:
+        lamp = table("light", m)
+        target = uv_of(lamp)
+        mixes = [(t, colour.SpectralDistribution(dict(zip(a.wavelengths, (1 - t) * ua + t * ub))))
+                 for t in np.linspace(0, 1, 1001)]
+        t, mix = min(mixes, key=lambda p: np.linalg.norm(uv_of(p[1]) - target))
+        lab = labs(lamp)
+        de = [colour.delta_E(lab, labs(s), method="CIE 2000").mean() for s in (mix, a, b)]
+        cct = colour.uv_to_CCT(target, method="Ohno 2013")[0]
+        inside = 0 < t < 1
+        print(f"| {m} | {cct:.0f} | " + (f"{t:.2f}" if inside else "beyond an end") + " | "
+              + (f"{de[0]:.2f}" if inside else "") + f" | {de[1]:.2f} | {de[2]:.2f} |")
+    print()
 
 
 if __name__ == "__main__":

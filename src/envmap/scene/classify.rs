@@ -1069,6 +1069,34 @@ fn lamp_or_reflector(
     Ok(Ok(m))
 }
 
+/// A lamp's spectrum: `--light`'s table; the daylight of its colour for a daylight-white panel
+/// of unknown kind; the sodium mix of its white; a black body for a filament; else the matched
+/// table.
+fn lamp_spd(
+    c: &Candidate,
+    m: &LampMatch,
+    settings: &SceneSettings,
+    daylight_panel: bool,
+) -> LightSpd {
+    match &settings.lamps {
+        Some(name) => LightSpd::Table { name: name.clone() },
+        None if daylight_panel => daylight_spd(&c.colour),
+        None => match (&m.mix, m.family) {
+            (Some(mix), _) => LightSpd::Mix(mix.clone()),
+            (None, super::Family::Incandescent) => LightSpd::Planckian {
+                cct_k: c
+                    .colour
+                    .cct_k
+                    .unwrap_or(2856.0)
+                    .clamp(super::families::FILAMENT_K.0, super::families::FILAMENT_K.1),
+            },
+            (None, _) => LightSpd::Table {
+                name: m.spd.clone(),
+            },
+        },
+    }
+}
+
 fn lamp_light(
     cells: &Cells,
     levels: &Levels,
@@ -1083,22 +1111,13 @@ fn lamp_light(
         "an emitter not of daylight"
     };
     let daylight_panel = inside && unknown_daylight_white(c, &m);
-    let spd = match &settings.lamps {
-        Some(name) => LightSpd::Table { name: name.clone() },
-        None if daylight_panel => daylight_spd(&c.colour),
-        None => match m.family {
-            super::Family::Incandescent => LightSpd::Planckian {
-                cct_k: c
-                    .colour
-                    .cct_k
-                    .unwrap_or(2856.0)
-                    .clamp(super::families::FILAMENT_K.0, super::families::FILAMENT_K.1),
-            },
-            _ => LightSpd::Table {
-                name: m.spd.clone(),
-            },
-        },
-    };
+    let spd = lamp_spd(c, &m, settings, daylight_panel);
+    let mixed = m.mix.as_ref().map_or(String::new(), |mix| {
+        format!(
+            "; its white lies between the standard and the colour-improved sodium lamp's: {}",
+            mix.label()
+        )
+    });
     let reason = match &settings.lamps {
         Some(name) => format!(
             "{what}; its spectrum is {name} (--light); its colour is nearest {} ({}, {:.4} uv)",
@@ -1115,7 +1134,7 @@ fn lamp_light(
             m.distance_uv
         ),
         None => format!(
-            "{what} ({}); {} ({}, {:.4} uv from its white: {})",
+            "{what} ({}); {} ({}, {:.4} uv from its white: {}){mixed}",
             c.colour.describe(),
             m.spd,
             m.family.name(),

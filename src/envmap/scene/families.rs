@@ -193,6 +193,91 @@ pub struct LampMatch {
     pub why: String,
     /// Other matches within [`AMBIGUITY_UV`] of the nearest: (spd, distance).
     pub alternatives: Vec<(String, f64)>,
+    /// A sodium lamp whose white lies between the standard and the colour-improved lamp's: the
+    /// mix of the two with its white (see [`sodium_mix`]), its spectrum in place of `spd`'s.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mix: Option<Mix>,
+}
+
+/// Two tables of one family mixed in proportion to their luminance: `share_b` of the mix's
+/// luminance is `b`'s.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Mix {
+    /// The first table (a built-in name).
+    pub a: String,
+    /// The second table (a built-in name).
+    pub b: String,
+    /// The share of `b` in the mix's luminance, 0 to 1.
+    pub share_b: f64,
+}
+
+impl Mix {
+    /// `hps 58% + HP2 42%`.
+    pub fn label(&self) -> String {
+        format!(
+            "{} {:.0}% + {} {:.0}%",
+            self.a,
+            100.0 * (1.0 - self.share_b),
+            self.b,
+            100.0 * self.share_b
+        )
+    }
+
+    /// The mix as a table: both tables at 1 nm over the range they share, each at luminance 1
+    /// (CIE 1931), weighted by their shares.
+    pub fn table(&self) -> Result<crate::spectrum::Tabulated> {
+        let a = data::spectrum(&self.a)?.data;
+        let b = data::spectrum(&self.b)?.data;
+        let lo = a.range_nm().0.max(b.range_nm().0).ceil();
+        let hi = a.range_nm().1.min(b.range_nm().1).floor();
+        let grid = WavelengthGrid::new(lo, hi, 1.0)?;
+        let cmfs = Cmfs::new(Observer::Cie1931, &grid)?;
+        let unit = |t: &crate::spectrum::Tabulated| -> Result<Spectrum> {
+            let s = t.resample(&grid, Interpolation::LIGHT);
+            let y = cmfs.integrate(&s, Rule::Riemann)?[1];
+            Ok(s.scaled(1.0 / y))
+        };
+        let (sa, sb) = (unit(&a)?, unit(&b)?);
+        let values = sa
+            .values()
+            .iter()
+            .zip(sb.values())
+            .map(|(&va, &vb)| (1.0 - self.share_b) * va + self.share_b * vb)
+            .collect();
+        crate::spectrum::Tabulated::new(grid.wavelengths_nm().collect(), values)
+    }
+}
+
+/// The high-pressure sodium lamps run from the standard lamp (`hps`, about 2000 K) to the
+/// colour-improved one (CIE HP2, 2500 K), whose higher sodium pressure widens the self-reversed
+/// D line: a coated or higher-pressure lamp lies between them.
+pub(crate) const SODIUM_SERIES: (&str, &str) = ("hps", "HP2");
+
+/// The mix of [`SODIUM_SERIES`] whose white is nearest `uv`: where the line between their
+/// whites passes nearest `uv` (CIE 1960 uv is a projection of XYZ, so mixes lie on that line),
+/// strictly between the two. None beyond either end, where the end table is the nearer lamp, and
+/// within a just noticeable difference ([`SAME_WHITE_UV`]) of either end's white.
+/// Measured (`tools/lamp_rendition.py`, ColorChecker mean CIEDE2000): the coated c100s54c
+/// (2236 K) is 0.6 from its mix, 3.6 from `hps` and 2.7 from HP2; the standard c100s54 lies
+/// beyond `hps`'s end and keeps `hps` (0.5).
+pub(crate) fn sodium_mix(uv: [f64; 2]) -> Option<Mix> {
+    let white = |name: &str| entries().iter().find(|e| e.name == name).map(|e| e.uv);
+    let (a, b) = (white(SODIUM_SERIES.0)?, white(SODIUM_SERIES.1)?);
+    let d = [b[0] - a[0], b[1] - a[1]];
+    let s = ((uv[0] - a[0]) * d[0] + (uv[1] - a[1]) * d[1]) / (d[0] * d[0] + d[1] * d[1]);
+    let near_end = |e: [f64; 2]| (uv[0] - e[0]).hypot(uv[1] - e[1]) <= SAME_WHITE_UV;
+    if !(s > 0.0 && s < 1.0) || near_end(a) || near_end(b) {
+        return None;
+    }
+    // At luminance 1 a table's X + 15Y + 3Z is 6 / v: the uv fraction s of the way from a to b
+    // is this share of b's luminance.
+    let (da, db) = (6.0 / a[1], 6.0 / b[1]);
+    let share_b = s * da / (s * da + (1.0 - s) * db);
+    Some(Mix {
+        a: SODIUM_SERIES.0.into(),
+        b: SODIUM_SERIES.1.into(),
+        share_b,
+    })
 }
 
 /// A candidate white: name, family, prevalence rank, distance.
@@ -222,6 +307,9 @@ pub(crate) fn match_lamp(uv: [f64; 2], cct_k: Option<f64>, elongation: f64) -> R
         Some(t) => (t, TRIPHOSPHOR_WHY),
         None => (chosen, why),
     };
+    let mix = (chosen.1 == Family::HighPressureSodium)
+        .then(|| sodium_mix(uv))
+        .flatten();
     Ok(LampMatch {
         spd: chosen.0.clone(),
         family: chosen.1,
@@ -233,6 +321,7 @@ pub(crate) fn match_lamp(uv: [f64; 2], cct_k: Option<f64>, elongation: f64) -> R
             .filter(|f| f.0 != chosen.0)
             .map(|f| (f.0.clone(), f.3))
             .collect(),
+        mix,
     })
 }
 
@@ -434,5 +523,31 @@ mod tests {
             (t[0] - a[0]).hypot(t[1] - a[1])
         };
         assert!(d < 5e-4, "{d}");
+    }
+
+    /// The sodium mix's own white (its table integrated) is the lamp's, wherever the lamp lies
+    /// between the two ends; beyond them there is no mix.
+    #[test]
+    fn a_sodium_mix_has_the_lamps_white() {
+        let grid = WavelengthGrid::visible_1nm();
+        let cmfs = Cmfs::new(Observer::Cie1931, &grid).unwrap();
+        let (a, b) = (uv_of("hps"), uv_of("HP2"));
+        for s in [0.1, 0.42, 0.9] {
+            let uv = [a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1])];
+            let mix = sodium_mix(uv).unwrap();
+            assert!(mix.share_b > 0.0 && mix.share_b < 1.0, "{mix:?}");
+            let t = mix.table().unwrap().resample(&grid, Interpolation::LIGHT);
+            let got = cmfs.light_xyz(&t, Rule::Riemann).unwrap().uv1960();
+            let d = (got[0] - uv[0]).hypot(got[1] - uv[1]);
+            assert!(d < 2e-4, "s {s}: {got:?} against {uv:?} ({d})");
+        }
+        let beyond = |s: f64| [a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1])];
+        assert!(sodium_mix(beyond(-0.2)).is_none());
+        assert!(sodium_mix(beyond(1.2)).is_none());
+        // A coated lamp's white (a 2236 K black body) is mixed; the standard lamp's is not.
+        let m = match_lamp(planckian_uv(2236.0), Some(2236.0), 1.0).unwrap();
+        let share = m.mix.as_ref().unwrap().share_b;
+        assert!((0.3..0.55).contains(&share), "{m:?}");
+        assert!(match_lamp(a, Some(2050.0), 1.0).unwrap().mix.is_none());
     }
 }

@@ -72,6 +72,9 @@ pub enum LightSpd {
         /// Temperature of the black body (K).
         cct_k: f64,
     },
+    /// Two tables of one family mixed to the lamp's white (a sodium lamp between the standard
+    /// and the colour-improved one).
+    Mix(families::Mix),
 }
 
 impl LightSpd {
@@ -81,6 +84,7 @@ impl LightSpd {
             LightSpd::Daylight { cct_k } => crate::illuminant::natural(*cct_k),
             LightSpd::Table { name } => Ok(crate::data::spectrum(name)?.data),
             LightSpd::Planckian { cct_k } => crate::illuminant::planckian(*cct_k),
+            LightSpd::Mix(mix) => mix.table(),
         }
     }
 
@@ -91,6 +95,8 @@ impl LightSpd {
             LightSpd::Daylight { .. } => "D65".into(),
             LightSpd::Table { name } => name.clone(),
             LightSpd::Planckian { .. } => "A".into(),
+            LightSpd::Mix(mix) if mix.share_b > 0.5 => mix.b.clone(),
+            LightSpd::Mix(mix) => mix.a.clone(),
         }
     }
 
@@ -104,6 +110,7 @@ impl LightSpd {
             LightSpd::Daylight { cct_k } => format!("daylight {cct_k:.0} K"),
             LightSpd::Table { name } => name.clone(),
             LightSpd::Planckian { cct_k } => format!("Planckian {cct_k:.0} K"),
+            LightSpd::Mix(mix) => mix.label(),
         }
     }
 }
