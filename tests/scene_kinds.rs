@@ -1,4 +1,4 @@
-//! What `specmap inspect --json` names in studios, rooms, dusk and night (issue 41): five real
+//! What `specmap inspect --json` names in studios, rooms, dusk and night (issue 41): seven real
 //! CC0 photographs (tests/data/real, README there) and the truth scenes of
 //! tools/truth_studio.py. Each decision is read from the JSON (`kind`, `solid_angle_sr`,
 //! `energy_share`, `reason`, the lamp's `family`), as a user's script would.
@@ -105,6 +105,37 @@ fn a_real_living_room_has_its_window_and_no_sky() {
     for w in &windows {
         let cos: f64 = dir(w).iter().zip(&main).map(|(a, b)| a * b).sum();
         assert!(cos > 60f64.to_radians().cos(), "{w}\n{text}");
+    }
+}
+
+/// Two low suns whose colour the files' lossy codec (DWAB) lost: a 6 x 6 patch (park) and a
+/// 6 x 7 one (sunrise_meadow) at each sun is blue only, B up to 11800 and 15008 and down to -1876
+/// and -2306, R and G under 1e-5. Each sun is still the sun, its colour taken from the light
+/// around the damaged patch and the damage said. Before, park's sun was "a sunlit surface" of
+/// the blue primary's colour, and sunrise_meadow was read as an enclosure lit by one blue
+/// phosphor-LED lamp, 93% of its energy in walls.
+#[test]
+fn a_sun_whose_colour_a_codec_lost_is_still_the_sun() {
+    for map in ["park", "sunrise_meadow"] {
+        let j = inspect(&format!("tests/data/real/{map}.exr"));
+        let text = j.to_string();
+        let sun = lights(&j, "sun");
+        assert_eq!(sun.len(), 1, "{map}: {text}");
+        let elevation = sun[0]["elevation_deg"].as_f64().unwrap();
+        assert!((5.0..15.0).contains(&elevation), "{map}: {text}");
+        assert_eq!(sun[0]["colour_from_halo"], true, "{map}: {text}");
+        assert!(
+            sun[0]["reason"]
+                .as_str()
+                .unwrap()
+                .contains("one primary only"),
+            "{map}: {text}"
+        );
+        // A white of daylight's or a black body's, nowhere near the blue primary (x 0.15).
+        let x = sun[0]["xy"][0].as_f64().unwrap();
+        assert!(x > 0.28, "{map}: {text}");
+        assert_eq!(lights(&j, "sky").len(), 1, "{map}: {text}");
+        assert!(lights(&j, "lamp").is_empty(), "{map}: {text}");
     }
 }
 

@@ -982,10 +982,11 @@ fn sun_light(
         daylight_spd(&c.colour),
         format!(
             "compact, {:.0} times the median luminance, {:.1} degrees up, {}, unique, with \
-             daylight about",
+             daylight about{}",
             c.e.stats.peak / levels.median,
             c.e.stats.elevation_deg(),
-            c.colour.describe()
+            c.colour.describe(),
+            c.e.colour_note()
         ),
     );
     l.colour_from_halo = c.e.colour_from_halo;

@@ -63,7 +63,30 @@ impl Levels {
     }
 }
 
+impl Levels {
+    /// Whether a cell's colour cannot be read from it: clipped ([`Levels::is_clipped`]), or a
+    /// pure primary of the space (see [`Cells::pure_primary`]).
+    pub fn colour_lost(&self, cells: &Cells, i: usize) -> bool {
+        self.is_clipped(cells, i) || cells.pure_primary(i)
+    }
+}
+
+/// A lit cell whose other two channels are at most this fraction of its largest is a pure
+/// primary of the space.
+const PURE_PRIMARY: f64 = 1e-3;
+
 impl Cells {
+    /// Whether the cell is lit in one channel only: its other two at most [`PURE_PRIMARY`] of it.
+    /// No light or surface of a photograph is a pure primary of the space it was stored in; a
+    /// lossy codec that lost a block's colour leaves one (the DWAB-compressed sun of
+    /// @pmndrs/assets' `park` is a 6 x 6 patch of blue only, B from -1876 to 11800, R and G under
+    /// 1e-5).
+    pub fn pure_primary(&self, i: usize) -> bool {
+        let mut v = self.raw(i);
+        v.sort_by(|a, b| b.total_cmp(a));
+        v[0] > 0.0 && v[1] <= PURE_PRIMARY * v[0]
+    }
+
     /// The cell's channels as the input had them (before the white premise's balance).
     pub fn raw(&self, i: usize) -> [f64; 3] {
         std::array::from_fn(|k| self.rgb[i][k] as f64 / self.balance[k])
@@ -94,6 +117,22 @@ pub(crate) struct Emitter {
     pub colour_from_halo: bool,
     /// Its cells at the clip level ([`Levels::is_clipped`]).
     pub clipped_cells: usize,
+    /// Its cells lit in one primary only ([`Cells::pure_primary`]): their colour is lost.
+    pub primary_cells: usize,
+}
+
+impl Emitter {
+    /// Where its colour came from when its core's was lost to a codec; "" otherwise (a clipped
+    /// core says so in `colour_from_halo` and `clipped_pixels`).
+    pub(crate) fn colour_note(&self) -> String {
+        match (self.colour_from_halo, self.primary_cells) {
+            (false, _) | (true, 0) => String::new(),
+            (true, n) => format!(
+                "; its core's colour is lost ({n} pixels lit in one primary only, as a lossy \
+                 codec leaves a damaged block): its colour is that of the light around it"
+            ),
+        }
+    }
 }
 
 /// The emitter candidates of the map, brightest peak first.
@@ -123,10 +162,11 @@ pub(crate) fn emitter(cells: &Cells, levels: &Levels, region: Vec<usize>) -> Emi
         .iter()
         .filter(|&&i| levels.is_clipped(cells, i))
         .count();
+    let primary_cells = region.iter().filter(|&&i| cells.pure_primary(i)).count();
     let unclipped = |set: &[usize]| -> Vec<usize> {
         set.iter()
             .copied()
-            .filter(|&i| !levels.is_clipped(cells, i))
+            .filter(|&i| !levels.colour_lost(cells, i))
             .collect()
     };
     let energy = |set: &[usize]| -> f64 {
@@ -158,6 +198,7 @@ pub(crate) fn emitter(cells: &Cells, levels: &Levels, region: Vec<usize>) -> Emi
         colour,
         colour_from_halo: from_halo,
         clipped_cells,
+        primary_cells,
     }
 }
 
@@ -178,7 +219,7 @@ fn halo(cells: &Cells, levels: &Levels, region: &[usize]) -> Vec<usize> {
         out.extend(
             next.iter()
                 .copied()
-                .filter(|&j| cells.y[j] > 0.0 && !levels.is_clipped(cells, j)),
+                .filter(|&j| cells.y[j] > 0.0 && !levels.colour_lost(cells, j)),
         );
         ring = next;
     }
@@ -221,6 +262,38 @@ mod tests {
         let xyz = e[0].colour;
         let x = xyz[0] / xyz.sum();
         assert!((x - 0.366).abs() < 0.002, "x {x}");
+    }
+
+    #[test]
+    fn a_core_of_one_primary_takes_its_colour_from_around_it() {
+        // A sun whose 4 x 4 block a lossy codec left blue only (as in @pmndrs' `park`), in a warm
+        // white glow.
+        let mut img = RgbImage::new(128, 64);
+        img.pixels.iter_mut().for_each(|p| *p = [0.1, 0.12, 0.2]);
+        for y in 24..36 {
+            for x in 56..68 {
+                let r2 = (x as f64 - 61.5).powi(2) + (y as f64 - 29.5).powi(2);
+                let k = 60.0 / (1.0 + r2 as f32);
+                img.set(x, y, [k, k * 0.87, k * 0.63]);
+            }
+        }
+        for y in 28..32 {
+            for x in 60..64 {
+                img.set(x, y, [1e-6, 0.0, 9000.0]);
+            }
+        }
+        let map = EnvMap::new(Layout::LatLong, img).unwrap();
+        let cells = Cells::new(&map, &RgbSpace::SRGB, [1.0; 3]);
+        let levels = Levels::of(&cells, 10.0);
+        let e = find(&cells, &levels);
+        assert_eq!(e[0].primary_cells, 16, "{:?}", e[0]);
+        assert!(e[0].colour_from_halo);
+        assert!(e[0].colour_note().contains("one primary only"));
+        // The glow's colour (RGB 1 : 0.87 : 0.63 in sRGB is x 0.3432, colour-science's
+        // RGB_to_XYZ), not blue's (x 0.15).
+        let xyz = e[0].colour;
+        let x = xyz[0] / xyz.sum();
+        assert!((x - 0.3432).abs() < 0.002, "x {x}");
     }
 
     #[test]
