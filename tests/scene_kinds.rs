@@ -1,5 +1,5 @@
-//! What `specmap inspect --json` names in studios, rooms, dusk and night (issue 41): seven real
-//! CC0 photographs (tests/data/real, README there) and the truth scenes of
+//! What `specmap inspect --json` names in studios, rooms, city squares, dusk and night (issue
+//! 41): nine real CC0 photographs (tests/data/real, README there) and the truth scenes of
 //! tools/truth_studio.py. Each decision is read from the JSON (`kind`, `solid_angle_sr`,
 //! `energy_share`, `reason`, the lamp's `family`), as a user's script would.
 
@@ -137,6 +137,39 @@ fn a_sun_whose_colour_a_codec_lost_is_still_the_sun() {
         assert_eq!(lights(&j, "sky").len(), 1, "{map}: {text}");
         assert!(lights(&j, "lamp").is_empty(), "{map}: {text}");
     }
+}
+
+/// Two city squares, as a courtyard is seen: under an overcast sky (plaza) and at sunset with the
+/// sun on the horizon (square_sunset). The sky is one light above the horizon; no lamp or window
+/// is named in the trees, the facades or the paving; the setting sun is the sun, given a low
+/// sun's spectrum (a sun under 4000 K is outside the CIE daylight series), and its reflection
+/// on the paving is a reflector.
+#[test]
+fn city_squares_have_one_sky_and_their_sun() {
+    for map in ["plaza", "square_sunset"] {
+        let j = inspect(&format!("tests/data/real/{map}.exr"));
+        let text = j.to_string();
+        let sky = lights(&j, "sky");
+        assert_eq!(sky.len(), 1, "{map}: {text}");
+        assert!(sr(&sky) < 2.0 * std::f64::consts::PI, "{map}: {text}");
+        assert!(share(&sky) > 0.7, "{map}: {text}");
+        for kind in ["lamp", "window"] {
+            assert!(lights(&j, kind).is_empty(), "{map} {kind}: {text}");
+        }
+    }
+    let j = inspect("tests/data/real/square_sunset.exr");
+    let text = j.to_string();
+    let sun = lights(&j, "sun");
+    assert_eq!(sun.len(), 1, "{text}");
+    assert!(
+        sun[0]["spd"].as_str().unwrap().starts_with("low sun"),
+        "{text}"
+    );
+    assert!(sun[0]["cct_K"].as_f64().unwrap() < 2500.0, "{text}");
+    assert!(
+        reflectors(&j).contains("below the horizon in daylight"),
+        "{text}"
+    );
 }
 
 /// Dawn over hills and a night field: the sky, glow and all, is the sky.
