@@ -227,6 +227,25 @@ fn the_truth_room_has_its_window_and_its_lamps() {
     assert_eq!(lights(&j, "lamp").len(), 3, "{text}");
 }
 
+/// The sodium street at night: its orange night sky, of the lamps' colour, is their light
+/// scattered over a city and given their spectrum, not a low sun's; the dawn sky, violet and
+/// orange, keeps daylight.
+#[test]
+fn a_night_sky_of_the_lamps_colour_is_their_glow() {
+    let j = inspect("tests/data/truth/street_hps.rgb.exr");
+    let text = j.to_string();
+    let sky = lights(&j, "sky");
+    assert_eq!(sky.len(), 1, "{text}");
+    assert_eq!(sky[0]["spd"], "hps", "{text}");
+    assert!(
+        sky[0]["reason"].as_str().unwrap().contains("scattered over a city"),
+        "{text}"
+    );
+    let j = inspect("tests/data/real/dawn.exr");
+    let sky = lights(&j, "sky");
+    assert!(sky[0]["spd"].as_str().unwrap().starts_with("daylight"), "{j}");
+}
+
 /// The dusk street: the twilight sky is the sky; the sodium lamps are sodium (a coated lamp's
 /// white is a black body's), given the mix of sodium tables of their white, and the LED lamps
 /// LEDs, not patches of sky.

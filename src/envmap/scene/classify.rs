@@ -250,7 +250,10 @@ pub(crate) fn classify(
         &mut out,
     )?;
     if !sky_cells.is_empty() {
-        let light = sky_light(cells, levels, sky_cells, twilight)?;
+        let mut light = sky_light(cells, levels, sky_cells, twilight)?;
+        if twilight {
+            city_glow(&mut light, &out.lights);
+        }
         out.lights.insert(sun_index.is_some() as usize, light);
     }
     if let (Err(why), Some(_)) = (&sun, candidates.first()) {
@@ -486,6 +489,31 @@ fn sky_light(
         false => "daylight-coloured, in the upper hemisphere, reaching high or wide",
     };
     daylight_light(cells, levels, sky_cells, LightKind::Sky, why.into())
+}
+
+/// A night sky warmer than the daylight series (under [`SKY_MIN_K`]) and of the colour of the
+/// scene's lamps (within [`EXPLAINED_UV`] of the nearest) is their light scattered by the air
+/// over a city: it is given their spectrum, where the low sun's would say a sun lit it.
+fn city_glow(sky: &mut Light, lights: &[Light]) {
+    if sky.cct_k.is_none_or(|k| k >= SKY_MIN_K) {
+        return;
+    }
+    let uv = |l: &Light| Xyz::new(l.colour[0], l.colour[1], l.colour[2]).uv1960();
+    let s = uv(sky);
+    let nearest = lights
+        .iter()
+        .filter(|l| l.kind == LightKind::Lamp)
+        .map(|l| (l, (uv(l)[0] - s[0]).hypot(uv(l)[1] - s[1])))
+        .min_by(|a, b| a.1.total_cmp(&b.1));
+    if let Some((lamp, d)) = nearest.filter(|&(_, d)| d <= EXPLAINED_UV) {
+        sky.reason += &format!(
+            "; of the colour of its {} lamps ({d:.4} uv): their light scattered over a city, \
+             given their spectrum",
+            lamp.spd
+        );
+        sky.spd_choice = lamp.spd_choice.clone();
+        sky.spd = lamp.spd.clone();
+    }
 }
 
 /// The luminance of the sky's and windows' bright parts: the 95th percentile of their cells.
