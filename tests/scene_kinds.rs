@@ -238,12 +238,18 @@ fn a_night_sky_of_the_lamps_colour_is_their_glow() {
     assert_eq!(sky.len(), 1, "{text}");
     assert_eq!(sky[0]["spd"], "hps", "{text}");
     assert!(
-        sky[0]["reason"].as_str().unwrap().contains("scattered over a city"),
+        sky[0]["reason"]
+            .as_str()
+            .unwrap()
+            .contains("scattered over a city"),
         "{text}"
     );
     let j = inspect("tests/data/real/dawn.exr");
     let sky = lights(&j, "sky");
-    assert!(sky[0]["spd"].as_str().unwrap().starts_with("daylight"), "{j}");
+    assert!(
+        sky[0]["spd"].as_str().unwrap().starts_with("daylight"),
+        "{j}"
+    );
 }
 
 /// The dusk street: the twilight sky is the sky; the sodium lamps are sodium (a coated lamp's
