@@ -142,8 +142,8 @@ fn a_sun_whose_colour_a_codec_lost_is_still_the_sun() {
 /// Two city squares, as a courtyard is seen: under an overcast sky (plaza) and at sunset with the
 /// sun on the horizon (square_sunset). The sky is one light above the horizon; no lamp or window
 /// is named in the trees, the facades or the paving; the setting sun is the sun, given a low
-/// sun's spectrum (a sun under 4000 K is outside the CIE daylight series), and its reflection
-/// on the paving is a reflector.
+/// sun's spectrum (a sun under 4000 K is outside the CIE daylight series), its reflection on
+/// the paving is a reflector, and the palace's sunlit facade is no sky.
 #[test]
 fn city_squares_have_one_sky_and_their_sun() {
     for map in ["plaza", "square_sunset"] {
@@ -170,6 +170,14 @@ fn city_squares_have_one_sky_and_their_sun() {
         reflectors(&j).contains("below the horizon in daylight"),
         "{text}"
     );
+    // The palace's sunlit facade (0.8 sr, as dim as the sky beside it and of a daylight colour)
+    // is a surface the sky lights, not sky: before, the sky covered 5.87 sr.
+    let cut = reflectors(&j)
+        .lines()
+        .filter(|r| r.starts_with("a part of the dim sky") && r.contains("a facade"))
+        .count();
+    assert!(cut >= 1, "{text}");
+    assert!(sr(&lights(&j, "sky")) < 5.0, "{text}");
 }
 
 /// Dawn over hills and a night field: the sky, glow and all, is the sky.

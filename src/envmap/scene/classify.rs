@@ -32,6 +32,7 @@ use super::cells::Cells;
 use super::emitters::{Emitter, Levels};
 use super::enclosure::{split_surface, surface_reason, Indoors, WINDOW_BLUE_K};
 use super::families::{match_lamp, LampMatch};
+use super::open_sky::open_sky;
 use super::regions::{components, RegionStats};
 use super::{Light, LightKind, LightSpd, SceneSettings};
 use crate::colorimetry::{cct, Xyz};
@@ -222,7 +223,8 @@ pub(crate) fn classify(
         out.lights
             .push(sun_light(cells, levels, &candidates[k], settings)?);
     }
-    let mut sky_cells = daylight_lights(cells, levels, &candidates, &daylight, &dim, &mut out)?;
+    let sky_cells = daylight_lights(cells, levels, &candidates, &daylight, &dim, &mut out)?;
+    let mut sky_cells = open_sky_cells(cells, levels, sky_cells, &dim, &mut out);
     if let (Some(k), false) = (sun_index, sky_cells.is_empty()) {
         add_circumsolar_sky(cells, &out.lights[0].cells, &candidates[k], &mut sky_cells);
     }
@@ -469,6 +471,39 @@ fn add_circumsolar_sky(
             && cells.direction(*i)[1] > 0.0
             && daylight_coloured(&cells.xyz(*i))
     }));
+}
+
+/// The sky's cells above the horizon that are open sky; the parts of dim sky sharp edges cut
+/// off from it are named among the bright reflectors.
+fn open_sky_cells(
+    cells: &Cells,
+    levels: &Levels,
+    mut sky_cells: Vec<usize>,
+    dim: &[Region],
+    out: &mut Classified,
+) -> Vec<usize> {
+    sky_cells.retain(|&i| cells.direction(i)[1] > 0.0);
+    let mut dim_mask = vec![false; cells.len()];
+    for d in dim {
+        d.cells.iter().for_each(|&i| dim_mask[i] = true);
+    }
+    let (open, cuts) = open_sky(cells, &sky_cells, &dim_mask);
+    for cut in cuts {
+        let st = RegionStats::of(cells, &cut.cells);
+        out.bright_reflectors.push(format!(
+            "a part of the dim sky ({} pixels, {:.3} sr, {:.1}% of the energy, {:.1} degrees \
+             up) that sharp edges of colour or luminance cut off from the open sky, textured \
+             ({:.0}% of its pixels peaks or dips of luminance) and standing on what is not sky \
+             ({:.0}% of the pixels round it): a surface the sky lights (a facade, a tree)",
+            cut.cells.len(),
+            cut.solid_angle_sr,
+            100.0 * share(levels, &st),
+            st.elevation_deg(),
+            100.0 * cut.textured,
+            100.0 * cut.standing
+        ));
+    }
+    open
 }
 
 /// All the sky's cells as one light.

@@ -22,6 +22,7 @@ pub(crate) mod emitters;
 pub(crate) mod enclosure;
 pub(crate) mod families;
 pub mod main_light;
+pub(crate) mod open_sky;
 pub mod overlay;
 pub mod reflectors;
 pub(crate) mod regions;
