@@ -61,9 +61,7 @@ impl Levels {
             && (cells.clipped_channels(i, self.max_channel) >= 2
                 || cells.raw(i).iter().any(|&v| v >= HALF_CEILING))
     }
-}
 
-impl Levels {
     /// Whether a cell's colour cannot be read from it: clipped ([`Levels::is_clipped`]), or a
     /// pure primary of the space (see [`Cells::pure_primary`]).
     pub fn colour_lost(&self, cells: &Cells, i: usize) -> bool {
