@@ -147,6 +147,12 @@ impl Cmfs {
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Xyz(pub [f64; 3]);
 
+impl From<Vector3<f64>> for Xyz {
+    fn from(v: Vector3<f64>) -> Xyz {
+        Xyz([v[0], v[1], v[2]])
+    }
+}
+
 impl Xyz {
     /// XYZ from its three components.
     pub fn new(x: f64, y: f64, z: f64) -> Self {

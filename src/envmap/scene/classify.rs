@@ -32,8 +32,7 @@ use super::cells::Cells;
 use super::emitters::{Emitter, Levels};
 use super::enclosure::{split_surface, surface_reason, Indoors, WINDOW_BLUE_K};
 use super::families::{match_lamp, LampMatch};
-use super::open_sky::open_sky;
-use super::regions::{components, RegionStats};
+use super::regions::{components, mask, RegionStats};
 use super::{Light, LightKind, LightSpd, SceneSettings};
 use crate::colorimetry::{cct, Xyz};
 use crate::envmap::convert::pixel_spectra::daylight_coloured;
@@ -350,10 +349,7 @@ fn twilight_sky(
         return Ok(false);
     };
     let median = super::enclosure::median_luminance(cells, &region);
-    let mut in_sky = vec![false; cells.len()];
-    for &i in &region {
-        in_sky[i] = true;
-    }
+    let in_sky = mask(cells, region.iter().copied());
     let glow = |c: &Candidate| {
         c.e.stats.elevation_deg() > 0.0
             && c.e.core_solid_angle_sr >= GLOW_MIN_SR
@@ -386,11 +382,10 @@ fn twilight_sky(
 
 /// Per cell: whether it belongs to one of the candidates.
 fn emitter_mask(cells: &Cells, candidates: &[Candidate]) -> Vec<bool> {
-    let mut in_emitter = vec![false; cells.len()];
-    for &i in candidates.iter().flat_map(|c| c.e.cells.iter()) {
-        in_emitter[i] = true;
-    }
-    in_emitter
+    mask(
+        cells,
+        candidates.iter().flat_map(|c| c.e.cells.iter().copied()),
+    )
 }
 
 /// Each candidate's cells.
@@ -483,11 +478,8 @@ fn open_sky_cells(
     out: &mut Classified,
 ) -> Vec<usize> {
     sky_cells.retain(|&i| cells.direction(i)[1] > 0.0);
-    let mut dim_mask = vec![false; cells.len()];
-    for d in dim {
-        d.cells.iter().for_each(|&i| dim_mask[i] = true);
-    }
-    let (open, cuts) = open_sky(cells, &sky_cells, &dim_mask);
+    let dim_mask = mask(cells, dim.iter().flat_map(|d| d.cells.iter().copied()));
+    let (open, cuts) = super::open_sky::split(cells, &sky_cells, &dim_mask);
     for cut in cuts {
         let st = RegionStats::of(cells, &cut.cells);
         out.bright_reflectors.push(format!(
@@ -533,7 +525,7 @@ fn city_glow(sky: &mut Light, lights: &[Light]) {
     if sky.cct_k.is_none_or(|k| k >= SKY_MIN_K) {
         return;
     }
-    let uv = |l: &Light| Xyz::new(l.colour[0], l.colour[1], l.colour[2]).uv1960();
+    let uv = |l: &Light| Xyz::from(l.colour).uv1960();
     let s = uv(sky);
     let nearest = lights
         .iter()

@@ -11,7 +11,8 @@
 //! - it stands on what is not sky, where a cloud is sky all round.
 
 use super::cells::Cells;
-use super::regions::components;
+use super::regions::{components, mask};
+use crate::colorimetry::Xyz;
 
 /// Neighbouring cells (of 0.7 degrees) whose luminances differ by this factor or more are an
 /// edge.
@@ -54,8 +55,8 @@ pub(crate) struct Cut {
 /// of smooth cells (none on an edge: [`on_edge`]) and the edge cells touching it; each part of
 /// the rest that is mostly dim sky, of [`CUT_MIN_SR`] or more, [`TEXTURED`] and standing
 /// ([`CUT_STANDING`]) loses its dim cells. `sky` need not be sorted.
-pub(crate) fn open_sky(cells: &Cells, sky: &[usize], dim: &[bool]) -> (Vec<usize>, Vec<Cut>) {
-    let in_sky = mask_of(cells, sky);
+pub(crate) fn split(cells: &Cells, sky: &[usize], dim: &[bool]) -> (Vec<usize>, Vec<Cut>) {
+    let in_sky = mask(cells, sky.iter().copied());
     let smooth = smooth_cells(cells, &in_sky);
     let mut kept = vec![false; cells.len()];
     for region in components(cells, &in_sky) {
@@ -77,12 +78,6 @@ pub(crate) fn open_sky(cells: &Cells, sky: &[usize], dim: &[bool]) -> (Vec<usize
     (open, cuts)
 }
 
-fn mask_of(cells: &Cells, set: &[usize]) -> Vec<bool> {
-    let mut mask = vec![false; cells.len()];
-    set.iter().for_each(|&i| mask[i] = true);
-    mask
-}
-
 fn solid_angle(cells: &Cells, part: &[usize]) -> f64 {
     part.iter().map(|&i| cells.omega(i)).sum()
 }
@@ -91,10 +86,7 @@ fn solid_angle(cells: &Cells, part: &[usize]) -> f64 {
 fn smooth_cells(cells: &Cells, in_sky: &[bool]) -> Vec<bool> {
     let uv: Vec<[f64; 2]> = (0..cells.len())
         .map(|i| match in_sky[i] {
-            true => {
-                let v = cells.xyz(i);
-                crate::colorimetry::Xyz::new(v[0], v[1], v[2]).uv1960()
-            }
+            true => Xyz::from(cells.xyz(i)).uv1960(),
             false => [0.0; 2],
         })
         .collect();
@@ -126,11 +118,8 @@ fn on_edge(cells: &Cells, in_sky: &[bool], uv: &[[f64; 2]], i: usize, k: f64) ->
 /// Marks in `kept` the region's largest connected part of smooth cells and the edge cells that
 /// touch it (the whole region where none of it is smooth).
 fn keep_open_part(cells: &Cells, region: &[usize], smooth: &[bool], kept: &mut [bool]) {
-    let mut mask = vec![false; cells.len()];
-    for &i in region {
-        mask[i] = smooth[i];
-    }
-    let Some(open) = components(cells, &mask)
+    let smooth_here = mask(cells, region.iter().copied().filter(|&i| smooth[i]));
+    let Some(open) = components(cells, &smooth_here)
         .into_iter()
         .max_by(|a, b| solid_angle(cells, a).total_cmp(&solid_angle(cells, b)))
     else {
@@ -160,11 +149,13 @@ fn judge(
 ) -> Option<Cut> {
     let dim_cells: Vec<usize> = part.iter().copied().filter(|&i| dim[i]).collect();
     let sr = solid_angle(cells, &dim_cells);
-    if sr < CUT_MIN_SR || 2 * dim_cells.len() < part.len() || sky_coloured(cells, open, part) {
+    let ring = ring(cells, part);
+    if sr < CUT_MIN_SR || 2 * dim_cells.len() < part.len() || sky_coloured(cells, open, part, &ring)
+    {
         return None;
     }
     let textured = texture(cells, rest, part);
-    let standing = standing(cells, in_sky, part);
+    let standing = standing(in_sky, &ring);
     (textured >= TEXTURED && standing >= CUT_STANDING).then_some(Cut {
         cells: dim_cells,
         solid_angle_sr: sr,
@@ -190,37 +181,38 @@ fn texture(cells: &Cells, mask: &[bool], part: &[usize]) -> f64 {
     count as f64 / part.len().max(1) as f64
 }
 
-/// Whether `part`'s colour is within [`SKY_EDGE_UV`] of the open sky's next to it (none next
-/// to it: not).
-fn sky_coloured(cells: &Cells, open: &[bool], part: &[usize]) -> bool {
-    let own = mask_of(cells, part);
+/// The cells next to `part` and not in it.
+fn ring(cells: &Cells, part: &[usize]) -> Vec<usize> {
+    let own = mask(cells, part.iter().copied());
     let ring: std::collections::BTreeSet<usize> = part
         .iter()
         .flat_map(|&i| cells.neighbours(i))
-        .filter(|&j| !own[j] && open[j])
+        .filter(|&j| !own[j])
         .collect();
+    ring.into_iter().collect()
+}
+
+/// Whether `part`'s colour is within [`SKY_EDGE_UV`] of the open sky's in its `ring` (none
+/// there: not).
+fn sky_coloured(cells: &Cells, open: &[bool], part: &[usize], ring: &[usize]) -> bool {
     let uv = |set: &mut dyn Iterator<Item = usize>| {
         let xyz = set.fold(nalgebra::Vector3::zeros(), |a, i| {
             a + cells.xyz(i) * cells.omega(i)
         });
-        crate::colorimetry::Xyz::new(xyz[0], xyz[1], xyz[2]).uv1960()
+        Xyz::from(xyz).uv1960()
     };
-    if ring.is_empty() {
+    let mut open_ring = ring.iter().copied().filter(|&j| open[j]).peekable();
+    if open_ring.peek().is_none() {
         return false;
     }
-    let (a, b) = (uv(&mut part.iter().copied()), uv(&mut ring.into_iter()));
+    let (a, b) = (uv(&mut part.iter().copied()), uv(&mut open_ring));
     (a[0] - b[0]).hypot(a[1] - b[1]) < SKY_EDGE_UV
 }
 
-/// The share of the cells next to `part` (and not in it) that are not sky.
-fn standing(cells: &Cells, in_sky: &[bool], part: &[usize]) -> f64 {
-    let own = mask_of(cells, part);
-    let mut round = std::collections::BTreeSet::new();
-    for &i in part {
-        round.extend(cells.neighbours(i).filter(|&j| !own[j]));
-    }
-    let not_sky = round.iter().filter(|&&j| !in_sky[j]).count();
-    not_sky as f64 / round.len().max(1) as f64
+/// The share of the cells of a part's `ring` that are not sky.
+fn standing(in_sky: &[bool], ring: &[usize]) -> f64 {
+    let not_sky = ring.iter().filter(|&&j| !in_sky[j]).count();
+    not_sky as f64 / ring.len().max(1) as f64
 }
 
 #[cfg(test)]
@@ -249,8 +241,8 @@ mod tests {
         (cells, sky)
     }
 
-    fn split(cells: &Cells, sky: &[usize]) -> (Vec<usize>, Vec<Cut>) {
-        open_sky(cells, sky, &vec![true; cells.len()])
+    fn split_all_dim(cells: &Cells, sky: &[usize]) -> (Vec<usize>, Vec<Cut>) {
+        split(cells, sky, &vec![true; cells.len()])
     }
 
     /// A warm stone facade, 60 x 40 cells on the horizon, with a dark window (a cell at 0.7
@@ -268,7 +260,7 @@ mod tests {
     #[test]
     fn a_smooth_sky_is_all_open() {
         let (cells, sky) = scene(|_, _| None);
-        let (open, cuts) = split(&cells, &sky);
+        let (open, cuts) = split_all_dim(&cells, &sky);
         assert!(cuts.is_empty(), "{cuts:?}");
         assert_eq!(open.len(), sky.len());
     }
@@ -276,7 +268,7 @@ mod tests {
     #[test]
     fn a_textured_facade_on_the_ground_is_cut() {
         let (cells, sky) = scene(facade);
-        let (open, cuts) = split(&cells, &sky);
+        let (open, cuts) = split_all_dim(&cells, &sky);
         assert_eq!(cuts.len(), 1, "{cuts:?}");
         // The facade's cells (and only those, give or take its outline) leave the sky.
         let in_facade = |i: usize| facade(i % 512, i / 512).is_some();
@@ -291,7 +283,7 @@ mod tests {
     fn a_textured_cloud_in_the_sky_stays_sky() {
         // The facade's texture, but floating: sky all round.
         let (cells, sky) = scene(|x, y| facade(x, y + 40));
-        let (open, cuts) = split(&cells, &sky);
+        let (open, cuts) = split_all_dim(&cells, &sky);
         assert!(cuts.is_empty(), "{cuts:?}");
         assert_eq!(open.len(), sky.len());
     }
@@ -308,7 +300,7 @@ mod tests {
             })
         };
         let (cells, sky) = scene(leaves);
-        let (_, cuts) = split(&cells, &sky);
+        let (_, cuts) = split_all_dim(&cells, &sky);
         assert!(cuts.is_empty(), "{cuts:?}");
     }
 
@@ -317,7 +309,7 @@ mod tests {
         // Untextured (no windows): a sky could be that smooth, so it stays.
         let plain = |x: usize, y: usize| facade(x, y).map(|_| [0.9, 0.75, 0.6]);
         let (cells, sky) = scene(plain);
-        let (_, cuts) = split(&cells, &sky);
+        let (_, cuts) = split_all_dim(&cells, &sky);
         assert!(cuts.is_empty(), "{cuts:?}");
     }
 }

@@ -4,6 +4,13 @@
 use super::cells::Cells;
 use nalgebra::Vector3;
 
+/// A mask over the cells that holds at `set`'s cells.
+pub(crate) fn mask(cells: &Cells, set: impl IntoIterator<Item = usize>) -> Vec<bool> {
+    let mut mask = vec![false; cells.len()];
+    set.into_iter().for_each(|i| mask[i] = true);
+    mask
+}
+
 /// The connected components (8-neighbourhood, wrapping in longitude) of the cells where `mask`
 /// holds, each a list of cell indices; largest first.
 pub(crate) fn components(cells: &Cells, mask: &[bool]) -> Vec<Vec<usize>> {
