@@ -22,7 +22,7 @@
 
 use super::cells::Cells;
 use super::emitters::{self, Emitter, Levels};
-use super::regions::{components, RegionStats};
+use super::regions::{components, mask, RegionStats};
 
 /// A region goes on below the horizon where the band under it is at least this fraction (and
 /// at most its inverse) of its luminance at the horizon.
@@ -152,11 +152,14 @@ pub(crate) fn split_surface(
 ) -> Option<(Vec<Emitter>, String)> {
     let reason = surface_reason(cells, &e.cells, others)?;
     let floor = CORE_CONTRAST * surface_level(cells, &e.cells);
-    let mut mask = vec![false; cells.len()];
-    for &i in &e.cells {
-        mask[i] = cells.y[i] as f64 >= floor;
-    }
-    let cores = components(cells, &mask)
+    let bright = mask(
+        cells,
+        e.cells
+            .iter()
+            .copied()
+            .filter(|&i| cells.y[i] as f64 >= floor),
+    );
+    let cores = components(cells, &bright)
         .into_iter()
         .map(|core| emitters::emitter(cells, levels, core))
         .collect();
