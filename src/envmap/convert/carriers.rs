@@ -19,8 +19,8 @@
 
 use crate::data;
 use crate::envmap::convert::pixel_spectra::{
-    daylight_coloured, Basis3, Colorimeter, Took, WhitePremise, NEGATIVE_TOLERANCE,
-    SMOOTH_CENTRE_NM, SMOOTH_HALF_WIDTH_NM,
+    daylight_coloured, Basis3, Colorimeter, Took, WhitePremise, SMOOTH_CENTRE_NM,
+    SMOOTH_HALF_WIDTH_NM,
 };
 use crate::envmap::roundtrip::metric::RgbMetric;
 use crate::error::{Error, Result};
@@ -502,14 +502,6 @@ fn passive_lstsq(g: &[Vector3<f64>], passive: &[bool], t: &Vector3<f64>) -> Vec<
         z[k] = sol[j];
     }
     z
-}
-
-/// Whether a written spectrum goes below zero (beyond rounding).
-pub(crate) fn is_negative(out: &[f32]) -> bool {
-    let (lo, hi) = out
-        .iter()
-        .fold((0f32, 0f32), |(lo, hi), &v| (lo.min(v), hi.max(v)));
-    lo < -(NEGATIVE_TOLERANCE as f32) * hi
 }
 
 #[cfg(test)]

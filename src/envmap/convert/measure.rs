@@ -3,6 +3,7 @@
 //! scale). With this measure done, the write only lays each pixel's few coefficients into its
 //! planes.
 
+use crate::envmap::convert::band_reduce;
 use crate::envmap::convert::carriers::Written;
 use crate::envmap::convert::pixel_spectra::Took;
 use crate::envmap::convert::pixels::{Flags, Pixels};
@@ -145,13 +146,19 @@ pub(crate) fn measure(px: &Pixels, bands: usize) -> Measured {
             let omega_row = map.row_solid_angle(y);
             for x in 0..width {
                 let omega = omega_row.unwrap_or_else(|| map.solid_angle(x, y));
-                let (w, flags) = px.spectrum(x, y, &mut out);
+                let (w, flags, bands_peak) = match px.spectrum_range(x, y) {
+                    Some((w, flags, range)) => (w, flags, band_reduce::max_abs_of_range(range)),
+                    None => {
+                        let (w, flags) = px.spectrum(x, y, &mut out);
+                        (w, flags, band_reduce::max_abs(&out))
+                    }
+                };
                 t.add(px, (x, y, omega), w, flags);
                 if !map.has_direction(x, y) {
                     continue;
                 }
                 let rgb = map.image.get(x, y);
-                let p = out.iter().chain(&rgb).fold(0f32, |m, v| m.max(v.abs()));
+                let p = bands_peak.max(band_reduce::max_abs(&rgb));
                 peak = peak.max(p);
                 if p > 0.0 && p.is_finite() {
                     bins[peak_bin(p)] += 1;

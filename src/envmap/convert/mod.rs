@@ -26,6 +26,7 @@
 //! ```
 
 pub(crate) mod analyse;
+pub(crate) mod band_reduce;
 pub mod basis_form;
 pub(crate) mod carrier_plan;
 pub(crate) mod carriers;

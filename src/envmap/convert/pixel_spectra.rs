@@ -24,6 +24,7 @@
 //! Sun pixels get the sun's SPD at the luminance their own conversion would have had.
 
 use crate::colorimetry::{Cmfs, Observer, RgbSpace, Xyz};
+use crate::envmap::convert::band_reduce::{self, NEGATIVE_TOLERANCE};
 use crate::envmap::roundtrip::metric::RgbMetric;
 #[cfg(test)]
 use crate::envmap::roundtrip::metric::ROUND_TRIP_ZERO;
@@ -108,8 +109,6 @@ pub const SKY_LOCUS_X: (f64, f64) = (0.2000, 0.4400);
 /// The smooth modulation's variable: x = (lambda - centre) / half width.
 pub(crate) const SMOOTH_CENTRE_NM: f64 = 580.0;
 pub(crate) const SMOOTH_HALF_WIDTH_NM: f64 = 200.0;
-/// A spectrum is "negative" when some value is below -this x its peak.
-pub(crate) const NEGATIVE_TOLERANCE: f64 = 1e-4;
 
 /// A main light is daylight when its least-squares fit by S0, S1, S2 leaves at most this relative
 /// RMS residual (CIE D illuminants: ~0; FL2: 0.4; A: 0.1; see the tests).
@@ -149,10 +148,12 @@ pub(crate) fn write_combination(
     {
         *o = a0 * b0 + a1 * b1 + a2 * b2;
     }
-    let (lo, hi) = out
-        .iter()
-        .fold((0f32, 0f32), |(lo, hi), &v| (lo.min(v), hi.max(v)));
-    lo < -(NEGATIVE_TOLERANCE as f32) * hi
+    is_negative(out)
+}
+
+/// Whether a written spectrum goes below zero (beyond rounding).
+pub(crate) fn is_negative(out: &[f32]) -> bool {
+    band_reduce::is_negative(band_reduce::min_max(out))
 }
 
 /// The smallest value of `sum a_j B_j` relative to its peak (negative: how negative).
@@ -739,6 +740,17 @@ impl Engine {
         }
     }
 
+    /// What [`Engine::spectrum`] returns for a pixel, and the range of the values it would
+    /// write (its lowest and highest, with 0), without writing them. None where the smooth
+    /// model is in use, which chooses by looking at the spectrum.
+    pub(crate) fn spectrum_range(
+        &self,
+        rgb: [f32; 3],
+        kind: PixelKind,
+    ) -> Option<(PixelResult, (f32, f32))> {
+        self.decide(rgb, kind).map(|c| self.range_chosen(c))
+    }
+
     /// Whether a pixel's kind can change its spectrum: the engine has a sun's SPD or a daylight
     /// sky (else every pixel is taken as plain).
     pub fn looks_at_kind(&self) -> bool {
@@ -789,32 +801,81 @@ impl Engine {
 
     /// Writes a decided spectrum into `out`.
     fn write_chosen(&self, chosen: Chosen, out: &mut [f32]) -> PixelResult {
-        match chosen {
-            Chosen::Sun { scale, luminance } => {
-                let (sun, sun_rgb) = self.sun.as_ref().expect("decided only with a sun");
-                for (o, v) in out.iter_mut().zip(sun) {
+        let negative = match chosen {
+            Chosen::Sun { scale, .. } => {
+                for (o, v) in out.iter_mut().zip(self.chosen_spectra(chosen)[0].iter()) {
                     *o = scale * v;
                 }
-                PixelResult {
-                    rgb_back: self.premise_back(sun_rgb * luminance),
-                    luminance,
-                    negative: sun.iter().any(|&v| v < 0.0),
-                    took: Took::Sun,
-                    combination: chosen.combination(),
-                }
+                self.sun_is_negative()
             }
             Chosen::Daylight(a) => {
                 let d = self.daylight.as_ref().expect("decided only with daylight");
-                let negative = d.write(&a, out);
-                PixelResult {
-                    rgb_back: self.premise_back(d.rgb * a),
-                    luminance: d.luminance(&a),
-                    negative,
-                    took: Took::Daylight,
-                    combination: chosen.combination(),
-                }
+                d.write(&a, out)
             }
-            Chosen::Colorchecker(mcc) => self.colorchecker_result(mcc, out),
+            Chosen::Colorchecker(a) => write_combination(&self.basis, &a, out),
+        };
+        self.chosen_result(chosen, negative)
+    }
+
+    /// A decided spectrum's result and the range of its values (see
+    /// [`band_reduce::combination_range`]), without writing it: the same values as
+    /// [`Engine::write_chosen`] writes, each computed as it computes them.
+    fn range_chosen(&self, chosen: Chosen) -> (PixelResult, (f32, f32)) {
+        let c = chosen.combination();
+        let range = band_reduce::combination_range(self.chosen_spectra(chosen), &c.weights);
+        let negative = match chosen {
+            Chosen::Sun { .. } => self.sun_is_negative(),
+            _ => band_reduce::is_negative(range),
+        };
+        (self.chosen_result(chosen, negative), range)
+    }
+
+    /// The spectra a decided pixel combines.
+    fn chosen_spectra(&self, chosen: Chosen) -> &[Vec<f32>] {
+        match chosen {
+            Chosen::Sun { .. } => {
+                let (sun, _) = self.sun.as_ref().expect("decided only with a sun");
+                std::slice::from_ref(sun)
+            }
+            Chosen::Daylight(_) => {
+                let d = self.daylight.as_ref().expect("decided only with daylight");
+                &d.spectra
+            }
+            Chosen::Colorchecker(_) => &self.basis,
+        }
+    }
+
+    /// Whether the sun's SPD goes below zero anywhere (a sun pixel's spectrum is a positive
+    /// multiple of it).
+    fn sun_is_negative(&self) -> bool {
+        self.sun
+            .as_ref()
+            .is_some_and(|(sun, _)| sun.iter().any(|&v| v < 0.0))
+    }
+
+    /// What a decided pixel became, `negative` or not.
+    fn chosen_result(&self, chosen: Chosen, negative: bool) -> PixelResult {
+        let (rgb, luminance, took) = match chosen {
+            Chosen::Sun { luminance, .. } => {
+                let (_, sun_rgb) = self.sun.as_ref().expect("decided only with a sun");
+                (sun_rgb * luminance, luminance, Took::Sun)
+            }
+            Chosen::Daylight(a) => {
+                let d = self.daylight.as_ref().expect("decided only with daylight");
+                (d.rgb * a, d.luminance(&a), Took::Daylight)
+            }
+            Chosen::Colorchecker(mcc) => (
+                self.basis_rgb * mcc,
+                (0..3).map(|j| mcc[j] * self.basis_y[j]).sum(),
+                Took::Colorchecker,
+            ),
+        };
+        PixelResult {
+            rgb_back: self.premise_back(rgb),
+            luminance,
+            negative,
+            took,
+            combination: chosen.combination(),
         }
     }
 
@@ -846,14 +907,7 @@ impl Engine {
 
     /// The ColorChecker basis with coefficients `mcc`, written into `out`.
     fn colorchecker_result(&self, mcc: Vector3<f64>, out: &mut [f32]) -> PixelResult {
-        let negative = write_combination(&self.basis, &mcc, out);
-        PixelResult {
-            rgb_back: self.premise_back(self.basis_rgb * mcc),
-            luminance: (0..3).map(|j| mcc[j] * self.basis_y[j]).sum(),
-            negative,
-            took: Took::Colorchecker,
-            combination: Combination::of(TABLE_COLORCHECKER, &mcc),
-        }
+        self.write_chosen(Chosen::Colorchecker(mcc), out)
     }
 
     /// CIEDE2000 between an input pixel and its round trip (see [`RgbMetric::round_trip_error`]).

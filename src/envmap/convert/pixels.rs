@@ -1,8 +1,8 @@
 //! How pixels become spectra: the plan's per-pixel engine ([`PixelPlan`]: the paper's basis or
 //! the faithful method's carriers) and one pixel's spectrum, whichever it is ([`Pixels`]).
 
-use crate::envmap::convert::carriers::{self, Assign, CarrierEngine, Written};
-use crate::envmap::convert::pixel_spectra::{Engine, PixelKind, PixelResult, Took};
+use crate::envmap::convert::carriers::{Assign, CarrierEngine, Written};
+use crate::envmap::convert::pixel_spectra::{self, Engine, PixelKind, PixelResult, Took};
 use crate::envmap::layout::EnvMap;
 use crate::envmap::roundtrip::metric::RgbMetric;
 use crate::envmap::scene::Cells;
@@ -100,6 +100,23 @@ impl Pixels<'_> {
         }
     }
 
+    /// What [`Pixels::spectrum`] returns for pixel (x, y), and the range of the values it would
+    /// write (its lowest and highest, with 0), without writing them: for the paper's basis,
+    /// where the pixel's spectrum is decided without looking at it (None otherwise).
+    pub(crate) fn spectrum_range(
+        &self,
+        x: usize,
+        y: usize,
+    ) -> Option<(Written, Flags, (f32, f32))> {
+        let PixelPlan::Basis { engine, .. } = self.plan else {
+            return None;
+        };
+        let kind = self.basis_kind(x, y).0;
+        let (r, range) = engine.spectrum_range(self.map.image.get(x, y), kind)?;
+        let (w, flags) = basis_written(&r, kind);
+        Some((w, flags, range))
+    }
+
     /// Writes pixel (x, y)'s spectrum into `out`: what it took, whether it goes negative and
     /// whether it is the sun's.
     pub(crate) fn spectrum(&self, x: usize, y: usize, out: &mut [f32]) -> (Written, Flags) {
@@ -114,7 +131,7 @@ impl Pixels<'_> {
                 let a = assign[cell];
                 let w = engine.spectrum(rgb, a, out);
                 let flags = Flags {
-                    negative: carriers::is_negative(out),
+                    negative: pixel_spectra::is_negative(out),
                     is_sun: a.sun && w.took == Took::Sun,
                 };
                 (w, flags)
