@@ -84,49 +84,79 @@ pub(crate) fn max_abs_of_range((lo, hi): (f32, f32)) -> f32 {
 /// summed in j order), without storing it.
 pub(crate) fn combination_range(spectra: &[Vec<f32>], weights: &[f32; 3]) -> (f32, f32) {
     let [w0, w1, w2] = *weights;
+    let mut lanes = Lanes::default();
     match spectra {
-        [s0] => range_of_lanes(&[s0], |[b0]| w0 * b0),
-        [s0, s1, s2] => range_of_lanes(&[s0, s1, s2], |[b0, b1, b2]| w0 * b0 + w1 * b1 + w2 * b2),
+        [s0] => {
+            let c0 = s0.chunks_exact(LANES);
+            for (i, &b0) in c0.remainder().iter().enumerate() {
+                lanes.take(i, w0 * b0);
+            }
+            for a0 in c0 {
+                let a0 = lane_array(a0);
+                lanes.take_all(std::array::from_fn(|k| w0 * a0[k]));
+            }
+        }
+        [s0, s1, s2] => {
+            let (c0, c1, c2) = (
+                s0.chunks_exact(LANES),
+                s1.chunks_exact(LANES),
+                s2.chunks_exact(LANES),
+            );
+            let tail = c0
+                .remainder()
+                .iter()
+                .zip(c1.remainder())
+                .zip(c2.remainder());
+            for (i, ((&b0, &b1), &b2)) in tail.enumerate() {
+                lanes.take(i, w0 * b0 + w1 * b1 + w2 * b2);
+            }
+            for ((a0, a1), a2) in c0.zip(c1).zip(c2) {
+                let (a0, a1, a2) = (lane_array(a0), lane_array(a1), lane_array(a2));
+                lanes.take_all(std::array::from_fn(|k| {
+                    w0 * a0[k] + w1 * a1[k] + w2 * a2[k]
+                }));
+            }
+        }
         _ => unreachable!("a pixel combines one spectrum or three"),
     }
+    lanes.range()
 }
 
-/// The range (as [`min_max`]) of `value` of the spectra's values at each band, in lanes. The
-/// last lanes, past the bands, take `value` of zeros: 0 or NaN, neither of which moves a range
-/// that holds 0.
+/// A chunk of `chunks_exact(LANES)` as an array (whose length the compiler then knows).
 #[inline(always)]
-fn range_of_lanes<const N: usize>(
-    spectra: &[&Vec<f32>; N],
-    value: impl Fn([f32; N]) -> f32,
-) -> (f32, f32) {
-    let bands = spectra.iter().map(|s| s.len()).min().unwrap_or(0);
-    let mut lo = [0f32; LANES];
-    let mut hi = [0f32; LANES];
-    let mut take = |chunks: [&[f32; LANES]; N]| {
-        for k in 0..LANES {
-            let v = value(std::array::from_fn(|j| chunks[j][k]));
-            lo[k] = smaller(lo[k], v);
-            hi[k] = larger(hi[k], v);
-        }
-    };
-    let whole = bands - bands % LANES;
-    for start in (0..whole).step_by(LANES) {
-        take(std::array::from_fn(|j| {
-            spectra[j][start..start + LANES]
-                .try_into()
-                .expect("a lane's width")
-        }));
+fn lane_array(chunk: &[f32]) -> [f32; LANES] {
+    chunk.try_into().expect("chunks of the lanes' width")
+}
+
+/// Eight lanes of lowest and highest values (with 0).
+#[derive(Default)]
+struct Lanes {
+    lo: [f32; LANES],
+    hi: [f32; LANES],
+}
+
+impl Lanes {
+    /// Takes `v` into lane `k`.
+    #[inline(always)]
+    fn take(&mut self, k: usize, v: f32) {
+        self.lo[k] = smaller(self.lo[k], v);
+        self.hi[k] = larger(self.hi[k], v);
     }
-    let tail: [[f32; LANES]; N] = std::array::from_fn(|j| {
-        let mut padded = [0f32; LANES];
-        padded[..bands - whole].copy_from_slice(&spectra[j][whole..bands]);
-        padded
-    });
-    take(std::array::from_fn(|j| &tail[j]));
-    (
-        lo.into_iter().fold(0f32, smaller),
-        hi.into_iter().fold(0f32, larger),
-    )
+
+    /// Takes `v[k]` into lane `k`, every lane.
+    #[inline(always)]
+    fn take_all(&mut self, v: [f32; LANES]) {
+        self.lo = std::array::from_fn(|k| smaller(self.lo[k], v[k]));
+        self.hi = std::array::from_fn(|k| larger(self.hi[k], v[k]));
+    }
+
+    /// The lowest and highest over the lanes.
+    fn range(&self) -> (f32, f32) {
+        (
+            self.lo.into_iter().fold(0f32, smaller),
+            self.hi.into_iter().fold(0f32, larger),
+        )
+    }
 }
 
 #[cfg(test)]

@@ -138,28 +138,50 @@ impl LineSource for SpectralRows {
             out.copy_from_slice(&self.extra[start..start + w]);
             return;
         }
-        let k_all = self.spectra.len();
         let stride = self.strides().0;
         let used = self.used[row];
-        let mut first = true;
-        for k in (0..k_all).filter(|k| used & (1 << k) != 0) {
-            let s = self.spectra[k][channel];
-            let start = row * stride + k * w;
-            let plane = &self.coefficients[start..start + w];
-            if first {
-                for (o, &c) in out.iter_mut().zip(plane) {
-                    *o = c * s;
-                }
-                first = false;
-            } else {
-                for (o, &c) in out.iter_mut().zip(plane) {
-                    *o += c * s;
-                }
-            }
-        }
-        if first {
+        // Each used spectrum's value at this band and its coefficient plane in this row.
+        let terms = (0..self.spectra.len())
+            .filter(|k| used & (1 << k) != 0)
+            .map(|k| {
+                let start = row * stride + k * w;
+                (
+                    self.spectra[k][channel],
+                    &self.coefficients[start..start + w],
+                )
+            });
+        let mut terms = terms.peekable();
+        if terms.peek().is_none() {
             out.fill(0.0);
+            return;
         }
+        // Three spectra a pass, summed in table order as the pixel's spectrum is.
+        let mut first = true;
+        while let Some(a) = terms.next() {
+            match (terms.next(), terms.next()) {
+                (None, _) => add_planes(out, [a], first),
+                (Some(b), None) => add_planes(out, [a, b], first),
+                (Some(b), Some(c)) => add_planes(out, [a, b, c], first),
+            }
+            first = false;
+        }
+    }
+}
+
+/// `out = sum_j s_j * plane_j` (`first`) or `out += ...`, the terms added left to right: one
+/// pass over the line for up to three spectra.
+#[inline(always)]
+fn add_planes<const N: usize>(out: &mut [f32], terms: [(f32, &[f32]); N], first: bool) {
+    let w = out.len();
+    let s: [f32; N] = terms.map(|(s, _)| s);
+    let planes: [&[f32]; N] = terms.map(|(_, p)| &p[..w]);
+    for (i, o) in out.iter_mut().enumerate() {
+        let head = planes[0][i] * s[0];
+        let mut v = if first { head } else { *o + head };
+        for j in 1..N {
+            v += planes[j][i] * s[j];
+        }
+        *o = v;
     }
 }
 

@@ -7,7 +7,7 @@ use crate::envmap::convert::band_reduce;
 use crate::envmap::convert::carriers::Written;
 use crate::envmap::convert::pixel_spectra::Took;
 use crate::envmap::convert::pixels::{Flags, Pixels};
-use crate::envmap::roundtrip::stats::RoundTripAccumulator;
+use crate::envmap::roundtrip::stats::{RoundTripAccumulator, Sample};
 use rayon::prelude::*;
 use std::sync::Mutex;
 
@@ -102,11 +102,12 @@ impl Tally {
         };
         let (took, exact) = px.exactness(w, de);
         self.count.add(took, flags.negative);
-        self.all.add(x, y, lum, omega, de);
+        let sample = Sample::new(x, y, lum, omega, de);
+        self.all.add_sample(&sample);
         if !flags.is_sun {
-            self.no_sun.add(x, y, lum, omega, de);
+            self.no_sun.add_sample(&sample);
             if !exact {
-                self.inexact.add(x, y, lum, omega, de);
+                self.inexact.add_sample(&sample);
             }
         }
     }

@@ -121,8 +121,13 @@ impl BlockEncoder {
         let w = f.width;
         self.line.resize(w, 0.0);
         self.halves.resize(if f.half { w } else { 0 }, f16::ZERO);
-        self.bytes
-            .resize(lines * f.file_order.len() * w * bytes.size(), 0);
+        let n = lines * f.file_order.len() * w * bytes.size();
+        if self.bytes.capacity() < n {
+            // A fresh buffer (the last one was handed over, or was smaller) comes zeroed from
+            // the allocator, where fresh pages need no zeroing: every byte is written anyway.
+            self.bytes = vec![0; n];
+        }
+        self.bytes.resize(n, 0);
     }
 
     /// Lays the current scan line out at byte `at` of the block; the byte after it (for the

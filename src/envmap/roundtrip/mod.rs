@@ -9,7 +9,7 @@ use crate::colorimetry::{Chromaticities, Observer, RgbSpace};
 use crate::envmap::files::{read_spectral_rows, AttrValue, EnvmapAttr, SpectralInfo};
 use crate::envmap::layout::{detect, EnvMap, Layout};
 use crate::envmap::roundtrip::metric::RgbMetric;
-use crate::envmap::roundtrip::stats::{Floor, RoundTripAccumulator, RoundTripStats};
+use crate::envmap::roundtrip::stats::{Floor, RoundTripAccumulator, RoundTripStats, Sample};
 use crate::envmap::RgbImage;
 use crate::error::{Error, Result};
 use crate::spectrum::{Interpolation, Rule, Tabulated, WavelengthGrid};
@@ -354,11 +354,12 @@ impl Comparison {
             .map(|s| s.solid_angle(x, y))
             .unwrap_or(1.0);
         let i = y * self.width + x;
-        tally.all.add(x, y, lum, omega, de);
+        let sample = Sample::new(x, y, lum, omega, de);
+        tally.all.add_sample(&sample);
         if self.sun.as_ref().is_some_and(|s| s[i] > 0.5) {
             tally.sun_pixels += 1;
         } else {
-            tally.no_sun.add(x, y, lum, omega, de);
+            tally.no_sun.add_sample(&sample);
         }
         if let Some(h) = tally
             .heatmap

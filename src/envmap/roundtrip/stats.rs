@@ -134,6 +134,49 @@ fn bin_of(luminance: f64) -> i32 {
     ) as i32
 }
 
+/// One pixel's round trip, placed in its luminance bin once for every accumulator it joins
+/// (the bin's logarithm is most of the cost of adding a pixel).
+#[derive(Debug, Clone, Copy)]
+pub struct Sample {
+    at: [u32; 2],
+    luminance: f64,
+    solid_angle: f64,
+    de2000: f64,
+    bin: SampleBin,
+}
+
+/// Where a pixel goes in an accumulator.
+#[derive(Debug, Clone, Copy)]
+enum SampleBin {
+    /// No solid angle: not a pixel of the map.
+    Outside,
+    /// No luminance (or NaN).
+    Black,
+    /// This luminance bin.
+    Lit(i32),
+}
+
+impl Sample {
+    /// Pixel (x, y) of `luminance` and `solid_angle`, whose round trip is `de2000` away (see
+    /// [`RoundTripAccumulator::add`]).
+    pub fn new(x: usize, y: usize, luminance: f64, solid_angle: f64, de2000: f64) -> Sample {
+        let bin = if solid_angle.is_nan() || solid_angle <= 0.0 {
+            SampleBin::Outside
+        } else if luminance.is_nan() || luminance <= 0.0 {
+            SampleBin::Black
+        } else {
+            SampleBin::Lit(bin_of(luminance))
+        };
+        Sample {
+            at: [x as u32, y as u32],
+            luminance,
+            solid_angle,
+            de2000,
+            bin,
+        }
+    }
+}
+
 fn lower_edge(bin: i32) -> f64 {
     (bin as f64 / BINS_PER_OCTAVE as f64).exp2()
 }
@@ -143,25 +186,37 @@ impl RoundTripAccumulator {
     /// whose round trip is `de2000` away. Pixels of no solid angle (outside the faces of a cross
     /// or strip) are not pixels of the map and are not added.
     pub fn add(&mut self, x: usize, y: usize, luminance: f64, solid_angle: f64, de2000: f64) {
-        if solid_angle.is_nan() || solid_angle <= 0.0 {
-            return;
-        }
-        if luminance.is_nan() || luminance <= 0.0 {
-            self.black_pixels += 1;
-            self.black_solid_angle += solid_angle;
-            return;
-        }
-        let k = bin_of(luminance);
-        let b = self.bin_mut(k);
-        let energy = luminance * solid_angle;
-        b.pixels += 1;
-        b.solid_angle += solid_angle;
-        b.energy += energy;
-        b.weighted += energy * de2000;
-        if de2000 > b.max || b.pixels == 1 {
-            b.max = de2000;
-            b.max_at = [x as u32, y as u32];
-            b.max_luminance = luminance;
+        self.add_sample(&Sample::new(x, y, luminance, solid_angle, de2000));
+    }
+
+    /// Adds a pixel placed in its bin (see [`RoundTripAccumulator::add`]).
+    pub fn add_sample(&mut self, s: &Sample) {
+        let Sample {
+            at: [x, y],
+            luminance,
+            solid_angle,
+            de2000,
+            bin,
+        } = *s;
+        match bin {
+            SampleBin::Outside => {}
+            SampleBin::Black => {
+                self.black_pixels += 1;
+                self.black_solid_angle += solid_angle;
+            }
+            SampleBin::Lit(k) => {
+                let b = self.bin_mut(k);
+                let energy = luminance * solid_angle;
+                b.pixels += 1;
+                b.solid_angle += solid_angle;
+                b.energy += energy;
+                b.weighted += energy * de2000;
+                if de2000 > b.max || b.pixels == 1 {
+                    b.max = de2000;
+                    b.max_at = [x, y];
+                    b.max_luminance = luminance;
+                }
+            }
         }
     }
 
