@@ -13,6 +13,7 @@
 use super::cells::Cells;
 use super::regions::{components, mask};
 use crate::colorimetry::Xyz;
+use rayon::prelude::*;
 
 /// Neighbouring cells (of 0.7 degrees) whose luminances differ by this factor or more are an
 /// edge.
@@ -59,8 +60,10 @@ pub(crate) fn split(cells: &Cells, sky: &[usize], dim: &[bool]) -> (Vec<usize>, 
     let in_sky = mask(cells, sky.iter().copied());
     let smooth = smooth_cells(cells, &in_sky);
     let mut kept = vec![false; cells.len()];
-    for region in components(cells, &in_sky) {
-        keep_open_part(cells, &region, &smooth, &mut kept);
+    let regions = components(cells, &in_sky);
+    let open_parts = largest_smooth_parts(cells, &regions, &smooth);
+    for (region, open) in regions.iter().zip(open_parts) {
+        keep_open_part(cells, region, open, &smooth, &mut kept);
     }
     let rest: Vec<bool> = (0..cells.len()).map(|i| in_sky[i] && !kept[i]).collect();
     let open_mask = kept.clone();
@@ -82,9 +85,10 @@ fn solid_angle(cells: &Cells, part: &[usize]) -> f64 {
     part.iter().map(|&i| cells.omega(i)).sum()
 }
 
-/// The sky's cells none of whose sky neighbours is across an edge.
+/// The sky's cells none of whose sky neighbours is across an edge (cells in parallel).
 fn smooth_cells(cells: &Cells, in_sky: &[bool]) -> Vec<bool> {
     let uv: Vec<[f64; 2]> = (0..cells.len())
+        .into_par_iter()
         .map(|i| match in_sky[i] {
             true => Xyz::from(cells.xyz(i)).uv1960(),
             false => [0.0; 2],
@@ -92,6 +96,7 @@ fn smooth_cells(cells: &Cells, in_sky: &[bool]) -> Vec<bool> {
         .collect();
     let k = coarseness(cells);
     (0..cells.len())
+        .into_par_iter()
         .map(|i| in_sky[i] && !on_edge(cells, in_sky, &uv, i, k))
         .collect()
 }
@@ -115,14 +120,42 @@ fn on_edge(cells: &Cells, in_sky: &[bool], uv: &[[f64; 2]], i: usize, k: f64) ->
     })
 }
 
-/// Marks in `kept` the region's largest connected part of smooth cells and the edge cells that
-/// touch it (the whole region where none of it is smooth).
-fn keep_open_part(cells: &Cells, region: &[usize], smooth: &[bool], kept: &mut [bool]) {
-    let smooth_here = mask(cells, region.iter().copied().filter(|&i| smooth[i]));
-    let Some(open) = components(cells, &smooth_here)
+/// For each region of the sky, its largest (in solid angle) connected part of smooth cells, the
+/// last of equal ones in the order [`components`] gives them (None: no cell of it is smooth).
+/// A smooth part lies in one region, as smooth cells are sky.
+fn largest_smooth_parts(
+    cells: &Cells,
+    regions: &[Vec<usize>],
+    smooth: &[bool],
+) -> Vec<Option<Vec<usize>>> {
+    let mut region_of = vec![usize::MAX; cells.len()];
+    for (r, region) in regions.iter().enumerate() {
+        region.iter().for_each(|&i| region_of[i] = r);
+    }
+    let mut largest: Vec<Option<(f64, Vec<usize>)>> = vec![None; regions.len()];
+    for part in components(cells, smooth) {
+        let sr = solid_angle(cells, &part);
+        let best = &mut largest[region_of[part[0]]];
+        if best.as_ref().is_none_or(|(most, _)| sr >= *most) {
+            *best = Some((sr, part));
+        }
+    }
+    largest
         .into_iter()
-        .max_by(|a, b| solid_angle(cells, a).total_cmp(&solid_angle(cells, b)))
-    else {
+        .map(|b| b.map(|(_, part)| part))
+        .collect()
+}
+
+/// Marks in `kept` the region's largest connected part of smooth cells (`open`) and the edge
+/// cells that touch it (the whole region where none of it is smooth).
+fn keep_open_part(
+    cells: &Cells,
+    region: &[usize],
+    open: Option<Vec<usize>>,
+    smooth: &[bool],
+    kept: &mut [bool],
+) {
+    let Some(open) = open else {
         region.iter().for_each(|&i| kept[i] = true);
         return;
     };
@@ -149,9 +182,12 @@ fn judge(
 ) -> Option<Cut> {
     let dim_cells: Vec<usize> = part.iter().copied().filter(|&i| dim[i]).collect();
     let sr = solid_angle(cells, &dim_cells);
+    // The ring (a mask of the map to find it) only for a part that can be a cut.
+    if sr < CUT_MIN_SR || 2 * dim_cells.len() < part.len() {
+        return None;
+    }
     let ring = ring(cells, part);
-    if sr < CUT_MIN_SR || 2 * dim_cells.len() < part.len() || sky_coloured(cells, open, part, &ring)
-    {
+    if sky_coloured(cells, open, part, &ring) {
         return None;
     }
     let textured = texture(cells, rest, part);
