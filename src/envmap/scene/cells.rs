@@ -11,6 +11,18 @@ use nalgebra::{Matrix3, Vector3};
 use rayon::prelude::*;
 use std::f64::consts::PI;
 
+/// The offsets (dx, dy) of a cell's eight neighbours, in the order they are visited.
+const NEIGHBOURS: [(isize, isize); 8] = [
+    (-1, -1),
+    (0, -1),
+    (1, -1),
+    (-1, 0),
+    (1, 0),
+    (-1, 1),
+    (0, 1),
+    (1, 1),
+];
+
 /// The widest lat-long analysed at its own resolution (wider maps are analysed at this width:
 /// every light still covers whole cells, and the analysis stays in a few tens of MB).
 pub(crate) const MAX_ANALYSIS_WIDTH: usize = 2048;
@@ -175,31 +187,28 @@ impl Cells {
         self.to_xyz * Vector3::new(p[0] as f64, p[1] as f64, p[2] as f64)
     }
 
-    /// The cells next to cell `i` (8-neighbourhood), wrapping in longitude; across a pole the
+    /// The cells next to cell `i` (8-neighbourhood, in [`NEIGHBOURS`]' order), wrapping in
+    /// longitude; across a pole the
     /// neighbours are the cells half a turn away on the same row.
     pub fn neighbours(&self, i: usize) -> impl Iterator<Item = usize> + '_ {
         let (w, h) = (self.width as isize, self.height as isize);
         let (x, y) = ((i % self.width) as isize, (i / self.width) as isize);
-        [
-            (-1, -1),
-            (0, -1),
-            (1, -1),
-            (-1, 0),
-            (1, 0),
-            (-1, 1),
-            (0, 1),
-            (1, 1),
-        ]
-        .into_iter()
-        .map(move |(dx, dy)| {
-            let (mut nx, mut ny) = (x + dx, y + dy);
-            if ny < 0 || ny >= h {
-                ny = ny.clamp(0, h - 1);
-                nx += w / 2;
-            }
-            (ny * w + nx.rem_euclid(w)) as usize
-        })
-        .filter(move |&j| j != i)
+        // Away from the map's edges a neighbour is an offset of the index: no wrap, no pole.
+        let inside = x > 0 && x + 1 < w && y > 0 && y + 1 < h;
+        NEIGHBOURS
+            .into_iter()
+            .map(move |(dx, dy)| {
+                if inside {
+                    return (i as isize + dy * w + dx) as usize;
+                }
+                let (mut nx, mut ny) = (x + dx, y + dy);
+                if ny < 0 || ny >= h {
+                    ny = ny.clamp(0, h - 1);
+                    nx += w / 2;
+                }
+                (ny * w + nx.rem_euclid(w)) as usize
+            })
+            .filter(move |&j| j != i)
     }
 }
 

@@ -16,6 +16,7 @@ use super::cells::Cells;
 use super::{Light, REFLECTOR};
 use crate::colorimetry::Xyz;
 use nalgebra::Vector3;
+use rayon::prelude::*;
 
 /// How the light reaching each reflector is estimated (`--reflectors`).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
@@ -185,19 +186,25 @@ fn local_mixes(
         .iter()
         .map(|c| Xyz::new(c.xyz[0], c.xyz[1], c.xyz[2]).uv1960())
         .collect();
-    // Reflectors' XYZ x solid angle x neutrality, gathered into the coarse cells.
+    // Reflectors' XYZ x solid angle x neutrality, computed on every core and gathered into
+    // the coarse cells in cell order (the sums as a serial loop makes them).
+    let weighed: Vec<Option<(usize, Vector3<f64>)>> = label
+        .par_iter()
+        .enumerate()
+        .map(|(i, &l)| {
+            (l == REFLECTOR).then(|| {
+                let c = coarse_cell(cells.direction(i), grid_height);
+                let xyz = cells.xyz(i);
+                (c, xyz * cells.omega(i) * neutral_weight(&whites, &xyz))
+            })
+        })
+        .collect();
     let mut sums = vec![Vector3::<f64>::zeros(); coarse];
-    for (i, &l) in label.iter().enumerate() {
-        if l == REFLECTOR {
-            let d = cells.direction(i);
-            let c = coarse_cell(d, grid_height);
-            let xyz = cells.xyz(i);
-            sums[c] += xyz * cells.omega(i) * neutral_weight(&whites, &xyz);
-        }
+    for (c, v) in weighed.into_iter().flatten() {
+        sums[c] += v;
     }
     let dirs: Vec<Vector3<f64>> = (0..coarse).map(coarse_dir).collect();
     let kappa = 1.0 / LOCAL_SIGMA_DEG.to_radians().powi(2);
-    use rayon::prelude::*;
     (0..coarse)
         .into_par_iter()
         .map(|c| {
