@@ -38,6 +38,7 @@ use crate::colorimetry::{cct, Xyz};
 use crate::envmap::convert::pixel_spectra::daylight_coloured;
 use crate::error::Result;
 use nalgebra::Vector3;
+use rayon::prelude::*;
 
 /// The sun's peak is at least this many times the map's median luminance.
 pub(crate) const SUN_CONTRAST: f64 = 100.0;
@@ -820,6 +821,7 @@ fn dim_skies(
         .fold(0f64, f64::max);
     let in_emitter = emitter_mask(cells, emitters);
     let mask: Vec<bool> = (0..cells.len())
+        .into_par_iter()
         .map(|i| {
             !in_emitter[i]
                 && cells.y[i] > 0.0

@@ -14,6 +14,7 @@
 use super::cells::Cells;
 use super::enclosure::median_luminance;
 use super::regions::{components, RegionStats};
+use rayon::prelude::*;
 
 /// The zenith cap the sky is grown from (degrees of elevation and up).
 pub(crate) const ZENITH_DEG: f64 = 70.0;
@@ -33,6 +34,7 @@ pub(crate) fn open_sky(cells: &Cells, in_emitter: &[bool]) -> Option<(Vec<usize>
     let elevation = |i: usize| cells.direction(i)[1].clamp(-1.0, 1.0).asin().to_degrees();
     let free = |i: usize| !in_emitter[i] && cells.y[i] > 0.0;
     let cap: Vec<usize> = (0..cells.len())
+        .into_par_iter()
         .filter(|&i| free(i) && elevation(i) >= ZENITH_DEG)
         .collect();
     if cap.is_empty() {
@@ -41,6 +43,7 @@ pub(crate) fn open_sky(cells: &Cells, in_emitter: &[bool]) -> Option<(Vec<usize>
     let zenith = median_luminance(cells, &cap);
     let (floor, ceiling) = (SKY_FLOOR * zenith, SKY_CEILING * zenith);
     let mask: Vec<bool> = (0..cells.len())
+        .into_par_iter()
         .map(|i| {
             let y = cells.y[i] as f64;
             free(i) && elevation(i) > 0.0 && y >= floor && y <= ceiling
