@@ -82,6 +82,9 @@ pub(crate) fn max_abs_of_range((lo, hi): (f32, f32)) -> f32 {
 /// The range (as [`min_max`]) of `sum_j weights[j] * spectra[j]`, one or three spectra, each
 /// value computed as [`crate::envmap::convert::pixel_spectra`] writes it (the f32 products
 /// summed in j order), without storing it.
+// Never inlined: inlined into its caller, the lanes were compiled as scalars in one build and
+// vectors in the next (4x the instructions), as the caller changed around them.
+#[inline(never)]
 pub(crate) fn combination_range(spectra: &[Vec<f32>], weights: &[f32; 3]) -> (f32, f32) {
     let [w0, w1, w2] = *weights;
     let mut lanes = Lanes::default();
