@@ -1,6 +1,8 @@
 //! Conversion throughput: envmaps/sunrise.exr (1024x512) to 81 bands, half, exact mode with the
 //! sun off (the work `tools/bench_convert.py` compares with Python), at ZIP, ZIPS, PIZ and no
-//! compression, and the faithful default at ZIP; then the encoder alone: libdeflate at level 4
+//! compression, and the faithful default at ZIP; `inspect` (read, the scene's analysis and the
+//! plan's measure of every pixel, no file: what the default conversion does before it writes);
+//! then the encoder alone: libdeflate at level 4
 //! compressing the very blocks of the ZIP output (inflated back from the file: the predictor's
 //! bytes as the writer gave them), on the same threads. The encoder's share of a conversion's
 //! wall time is the second's time over the first's (`cargo bench --bench convert`).
@@ -8,7 +10,7 @@
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use exr::block::chunk::CompressedBlock;
 use rayon::prelude::*;
-use specmap::envmap::convert::{convert, ConvertOptions, LightSpec};
+use specmap::envmap::convert::{convert, inspect, ConvertOptions, LightSpec};
 use specmap::envmap::files::zip::ZipEncoder;
 use specmap::envmap::files::Compression;
 use specmap::fit::Mode;
@@ -81,6 +83,9 @@ fn bench(c: &mut Criterion) {
             b.iter(|| convert(&input, &out, opts, &|_, _| {}).expect("converts"))
         });
     }
+    g.bench_function("inspect (faithful: read, analyse, plan)", |b| {
+        b.iter(|| inspect(&input, &ConvertOptions::faithful()).expect("inspects"))
+    });
     g.finish();
 
     // The encoder alone on the exact ZIP output's own blocks, in parallel as the writer runs it.

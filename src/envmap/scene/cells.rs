@@ -188,8 +188,7 @@ impl Cells {
     }
 
     /// The cells next to cell `i` (8-neighbourhood, in [`NEIGHBOURS`]' order), wrapping in
-    /// longitude; across a pole the
-    /// neighbours are the cells half a turn away on the same row.
+    /// longitude; across a pole the neighbours are the cells half a turn away on the same row.
     pub fn neighbours(&self, i: usize) -> impl Iterator<Item = usize> + '_ {
         let (w, h) = (self.width as isize, self.height as isize);
         let (x, y) = ((i % self.width) as isize, (i / self.width) as isize);
