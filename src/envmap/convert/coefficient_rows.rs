@@ -188,15 +188,17 @@ fn add_planes<const N: usize>(out: &mut [f32], terms: [(f32, &[f32]); N], first:
 /// Computes and writes an image a batch of rows at a time, filling the next batch while the
 /// current one is written (so neither stage waits for the other's slowest part): `fill(y, row)`
 /// fills image row `y` and returns what it measured; `write(y0, rows, batch)` writes rows
-/// `y0..y0 + rows` held in `batch`. Two batches of `batch` rows are in memory. Returns what each
-/// row measured, in row order.
+/// `y0..y0 + rows` held in `batch`. Two batches of `batch` rows are in memory. What each row
+/// measured is handed to `take` in row order, whatever thread filled it (so sums over the rows
+/// do not depend on the threads).
 pub(crate) fn stream<S: Send>(
     buffers: &mut [SpectralRows; 2],
     height: usize,
     batch: usize,
     fill: &(dyn Fn(usize, RowMut) -> S + Sync),
     write: &mut (dyn FnMut(usize, usize, &SpectralRows) -> Result<()> + Send),
-) -> Result<Vec<S>> {
+    take: &mut dyn FnMut(S),
+) -> Result<()> {
     let fill_batch = |buf: &mut SpectralRows, y0: usize, rows: usize| -> Vec<S> {
         buf.rows_mut(rows)
             .enumerate()
@@ -206,7 +208,7 @@ pub(crate) fn stream<S: Send>(
     let [a, b] = buffers;
     let (mut now, mut next) = (a, b);
     let mut rows = batch.clamp(1, height.max(1)).min(height);
-    let mut stats = fill_batch(now, 0, rows);
+    fill_batch(now, 0, rows).into_iter().for_each(&mut *take);
     let mut y0 = 0;
     while y0 < height {
         let next_y = y0 + rows;
@@ -217,11 +219,11 @@ pub(crate) fn stream<S: Send>(
             || fill_batch(next, next_y, next_rows),
         );
         written?;
-        stats.extend(more);
+        more.into_iter().for_each(&mut *take);
         std::mem::swap(&mut now, &mut next);
         (y0, rows) = (next_y, next_rows);
     }
-    Ok(stats)
+    Ok(())
 }
 
 #[cfg(test)]
@@ -289,7 +291,8 @@ mod tests {
         let new = || SpectralRows::new(spectra.clone(), 1, 2, 0, 3, 4);
         let mut buffers = [new(), new()];
         let mut seen = Vec::new();
-        let stats = stream(
+        let mut stats = Vec::new();
+        stream(
             &mut buffers,
             10,
             4,
@@ -314,6 +317,7 @@ mod tests {
                 }
                 Ok(())
             },
+            &mut |y| stats.push(y),
         )
         .unwrap();
         assert_eq!(stats, (0..10).collect::<Vec<_>>());

@@ -9,7 +9,6 @@ use crate::envmap::convert::pixel_spectra::Took;
 use crate::envmap::convert::pixels::{Flags, Pixels};
 use crate::envmap::roundtrip::stats::{RoundTripAccumulator, Sample};
 use rayon::prelude::*;
-use std::sync::Mutex;
 
 /// Binary exponents of a pixel's largest value are binned from 2^-150 to 2^149.
 const PEAK_BINS: usize = 300;
@@ -131,55 +130,59 @@ impl Measured {
     }
 }
 
-/// Computes and measures every pixel's spectrum (`bands` values), rows in parallel.
+/// Rows measured together: their tallies are merged in row order once all are done.
+const ROWS_PER_MERGE: usize = 64;
+
+/// Computes and measures every pixel's spectrum (`bands` values), rows in parallel. Each row's
+/// tally is merged in row order, a batch of rows at a time (a map's rows of luminance bins would
+/// not fit at once; merged as threads finish, the sums' last bits moved with them).
 pub(crate) fn measure(px: &Pixels, bands: usize) -> Measured {
-    let map = px.map;
-    let (width, height) = (map.image.width, map.image.height);
-    // Each row's tally is merged as it is done (a map's rows of luminance bins would not fit).
-    let tally = Mutex::new(Tally::default());
-    let (peak, bins) = (0..height)
-        .into_par_iter()
-        .map(|y| {
-            let mut t = Tally::default();
-            let mut out = vec![0f32; bands];
-            let mut bins = [0usize; PEAK_BINS];
-            let mut peak = 0f32;
-            let omega_row = map.row_solid_angle(y);
-            for x in 0..width {
-                let omega = omega_row.unwrap_or_else(|| map.solid_angle(x, y));
-                let (w, flags, bands_peak) = match px.spectrum_range(x, y) {
-                    Some((w, flags, range)) => (w, flags, band_reduce::max_abs_of_range(range)),
-                    None => {
-                        let (w, flags) = px.spectrum(x, y, &mut out);
-                        (w, flags, band_reduce::max_abs(&out))
-                    }
-                };
-                t.add(px, (x, y, omega), w, flags);
-                if !map.has_direction(x, y) {
-                    continue;
-                }
-                let rgb = map.image.get(x, y);
-                let p = bands_peak.max(band_reduce::max_abs(&rgb));
-                peak = peak.max(p);
-                if p > 0.0 && p.is_finite() {
-                    bins[peak_bin(p)] += 1;
-                }
-            }
-            tally
-                .lock()
-                .expect("no tally is merged by a panicking thread")
-                .merge(&t);
-            (peak, bins)
-        })
-        .reduce(
-            || (0f32, [0usize; PEAK_BINS]),
-            |a, b| (a.0.max(b.0), std::array::from_fn(|k| a.1[k] + b.1[k])),
-        );
-    Measured {
-        tally: tally
-            .into_inner()
-            .expect("no tally is merged by a panicking thread"),
-        peak,
-        bins,
+    let height = px.map.image.height;
+    let mut tally = Tally::default();
+    let mut peak = 0f32;
+    let mut bins = [0usize; PEAK_BINS];
+    for y0 in (0..height).step_by(ROWS_PER_MERGE) {
+        let rows: Vec<(Tally, f32, [usize; PEAK_BINS])> = (y0..(y0 + ROWS_PER_MERGE).min(height))
+            .into_par_iter()
+            .map(|y| measure_row(px, bands, y))
+            .collect();
+        for (t, p, b) in &rows {
+            tally.merge(t);
+            peak = peak.max(*p);
+            bins.iter_mut().zip(b).for_each(|(n, k)| *n += k);
+        }
     }
+    Measured { tally, peak, bins }
+}
+
+/// Row `y`'s tally, largest magnitude, and per binary exponent how many of its pixels have
+/// their largest magnitude there.
+fn measure_row(px: &Pixels, bands: usize, y: usize) -> (Tally, f32, [usize; PEAK_BINS]) {
+    let map = px.map;
+    let mut t = Tally::default();
+    let mut out = vec![0f32; bands];
+    let mut bins = [0usize; PEAK_BINS];
+    let mut peak = 0f32;
+    let omega_row = map.row_solid_angle(y);
+    for x in 0..map.image.width {
+        let omega = omega_row.unwrap_or_else(|| map.solid_angle(x, y));
+        let (w, flags, bands_peak) = match px.spectrum_range(x, y) {
+            Some((w, flags, range)) => (w, flags, band_reduce::max_abs_of_range(range)),
+            None => {
+                let (w, flags) = px.spectrum(x, y, &mut out);
+                (w, flags, band_reduce::max_abs(&out))
+            }
+        };
+        t.add(px, (x, y, omega), w, flags);
+        if !map.has_direction(x, y) {
+            continue;
+        }
+        let rgb = map.image.get(x, y);
+        let p = bands_peak.max(band_reduce::max_abs(&rgb));
+        peak = peak.max(p);
+        if p > 0.0 && p.is_finite() {
+            bins[peak_bin(p)] += 1;
+        }
+    }
+    (t, peak, bins)
 }

@@ -389,18 +389,17 @@ fn stream_rows(
     while y0 < height {
         let rows = s.rows_per_block.min(height - y0);
         let buf = &mut buffer[..rows * width * per_pixel];
-        let batch = buf
+        // Each row's tally, merged in row order: the sums do not depend on the threads.
+        let rows_tallies: Vec<Tally> = buf
             .par_chunks_mut(width * per_pixel)
             .enumerate()
-            .fold(Tally::default, |mut t, (r, row)| {
+            .map(|(r, row)| {
+                let mut t = Tally::default();
                 write_row(s, y0 + r, row, per_pixel, &mut t);
                 t
             })
-            .reduce(Tally::default, |mut a, b| {
-                a.merge(&b);
-                a
-            });
-        tally.merge(&batch);
+            .collect();
+        rows_tallies.iter().for_each(|t| tally.merge(t));
         writer.rows(y0, buf)?;
         y0 += rows;
         progress(y0, height);
@@ -429,17 +428,10 @@ fn stream_planes(
         )
     };
     let mut planes = [new_batch(), new_batch()];
-    // Each row's tally is merged as it is done (a map's rows of luminance bins would not fit).
-    let tally = std::sync::Mutex::new(Tally::default());
-    let fill = |y: usize, mut row: RowMut| {
-        let t = plane_row(s, engine, y, &mut row);
-        if s.counting {
-            tally
-                .lock()
-                .expect("no tally is merged by a panicking thread")
-                .merge(&t);
-        }
-    };
+    // Each row's tally is merged in row order as its batch is done (a map's rows of luminance
+    // bins would not fit; merged as threads finish, the sums' last bits moved with them).
+    let mut tally = Tally::default();
+    let fill = |y: usize, mut row: RowMut| plane_row(s, engine, y, &mut row);
     coefficient_rows::stream(
         &mut planes,
         height,
@@ -456,10 +448,13 @@ fn stream_planes(
             progress(y0 + rows, height);
             Ok(())
         },
+        &mut |t| {
+            if s.counting {
+                tally.merge(&t);
+            }
+        },
     )?;
-    Ok(tally
-        .into_inner()
-        .expect("no tally is merged by a panicking thread"))
+    Ok(tally)
 }
 
 /// A batch of coefficient planes with the sun mask as their one extra channel, and R, G, B read
